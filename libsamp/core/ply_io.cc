@@ -1,0 +1,67 @@
+#include "libsamp/core/ply_io.h"
+
+#include <cstring>
+#include <fstream>
+
+#include "libsamp/core/atomic_file.h"
+#include "libsamp/core/error.h"
+
+namespace samp {
+namespace {
+
+template <typename T>
+void Put(std::ofstream& out, const T& value) {
+  out.write(reinterpret_cast<const char*>(&value), sizeof(T));
+}
+
+void Finish(std::ofstream& out, const std::string& path) {
+  out.close();
+  SAMP_CHECK(out) << "error writing " << path;
+}
+
+}  // namespace
+
+void WritePly(const std::string& path, const Mesh& mesh) {
+  WriteFileAtomically(path, [&](const std::string& temporary) {
+    std::ofstream out(temporary, std::ios::binary);
+    SAMP_CHECK(out) << "cannot open " << temporary << " for writing";
+    out << "ply\nformat binary_little_endian 1.0\ncomment samp mesh, object frame, metres\n"
+        << "element vertex " << mesh.vertices.size() << "\n"
+        << "property float x\nproperty float y\nproperty float z\n"
+        << "element face " << mesh.triangles.size() << "\n"
+        << "property list uchar int vertex_indices\nend_header\n";
+    for (const Eigen::Vector3f& v : mesh.vertices) {
+      for (int a = 0; a < 3; ++a) Put(out, v[a]);
+    }
+    for (const Eigen::Vector3i& t : mesh.triangles) {
+      Put(out, uint8_t(3));
+      for (int a = 0; a < 3; ++a) Put(out, int32_t(t[a]));
+    }
+    Finish(out, temporary);
+  });
+}
+
+void WritePly(const std::string& path, const PointCloud& cloud) {
+  const bool has_colors = !cloud.colors.empty();
+  SAMP_CHECK(!has_colors || cloud.colors.size() == cloud.points.size())
+      << "point cloud has " << cloud.colors.size() << " colours for " << cloud.points.size()
+      << " points";
+  WriteFileAtomically(path, [&](const std::string& temporary) {
+    std::ofstream out(temporary, std::ios::binary);
+    SAMP_CHECK(out) << "cannot open " << temporary << " for writing";
+    out << "ply\nformat binary_little_endian 1.0\ncomment samp points, metres\n"
+        << "element vertex " << cloud.points.size() << "\n"
+        << "property float x\nproperty float y\nproperty float z\n";
+    if (has_colors) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    out << "end_header\n";
+    for (size_t i = 0; i < cloud.points.size(); ++i) {
+      for (int a = 0; a < 3; ++a) Put(out, cloud.points[i][a]);
+      if (has_colors) {
+        for (int a = 0; a < 3; ++a) Put(out, cloud.colors[i][a]);
+      }
+    }
+    Finish(out, temporary);
+  });
+}
+
+}  // namespace samp

@@ -1,0 +1,122 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "libsamp/core/atomic_file.h"
+#include "libsamp/core/error.h"
+#include "libsamp/core/grid_spec.h"
+#include "libsamp/core/mesh.h"
+#include "libsamp/core/ply_io.h"
+#include "libsamp/core/progress.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path TempDir(const std::string& name) {
+  fs::path dir = fs::temp_directory_path() / ("samp_core_test_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+TEST(GridSpec, FromBoxCoversTheBox) {
+  const GridSpec grid = GridSpec::FromBox(Eigen::Vector3d(-1, -2, -0.5), Eigen::Vector3d(1, 0, 0.5), 0.1);
+  EXPECT_EQ(grid.dims, Eigen::Vector3i(21, 21, 11));
+  EXPECT_NEAR(grid.MaxCorner().x(), 1.0, 1e-9);
+  EXPECT_EQ(grid.Index(1, 0, 0), 1);
+  EXPECT_EQ(grid.Index(0, 1, 0), 21);
+  EXPECT_EQ(grid.Index(0, 0, 1), 21 * 21);
+  EXPECT_TRUE(grid.Position(10, 20, 5).isApprox(Eigen::Vector3d(0, 0, 0), 1e-12) ||
+              grid.Position(10, 20, 5).norm() < 1e-12);
+  EXPECT_TRUE(grid.ToVoxel(Eigen::Vector3d(0, 0, 0)).isApprox(Eigen::Vector3d(10, 20, 5)));
+}
+
+TEST(GridSpec, CheckNamesTheField) {
+  GridSpec grid;
+  grid.voxel_size = -1;
+  try {
+    grid.Check();
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("voxel_size"), std::string::npos);
+  }
+  EXPECT_THROW(GridSpec::FromBox(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(-1, 1, 1), 0.1), Error);
+}
+
+TEST(Mesh, BoxIsClosedAndOutward) {
+  const Mesh box = MakeBoxMesh(Eigen::Vector3d(-1, -2, -3), Eigen::Vector3d(1, 2, 3));
+  EXPECT_EQ(box.triangles.size(), 12u);
+  const AlignedBox bounds = box.Bounds();
+  EXPECT_TRUE(bounds.Size().isApprox(Eigen::Vector3d(2, 4, 6)));
+  // Outward normals: each triangle's normal points away from the centre.
+  const auto normals = box.TriangleNormals();
+  for (size_t i = 0; i < box.triangles.size(); ++i) {
+    const Eigen::Vector3f centroid = (box.vertices[box.triangles[i][0]] + box.vertices[box.triangles[i][1]] +
+                                      box.vertices[box.triangles[i][2]]) / 3.f;
+    EXPECT_GT(normals[i].dot(centroid), 0.f) << "triangle " << i;
+  }
+}
+
+TEST(Mesh, SphereIsOutwardAndOnRadius) {
+  const Mesh sphere = MakeSphereMesh(Eigen::Vector3d(1, 2, 3), 0.5, 8, 16);
+  for (const auto& v : sphere.vertices) {
+    EXPECT_NEAR((v.cast<double>() - Eigen::Vector3d(1, 2, 3)).norm(), 0.5, 1e-6);
+  }
+  const auto normals = sphere.TriangleNormals();
+  for (size_t i = 0; i < sphere.triangles.size(); ++i) {
+    const Eigen::Vector3f c = sphere.vertices[sphere.triangles[i][0]] - Eigen::Vector3f(1, 2, 3);
+    EXPECT_GT(normals[i].dot(c), 0.f);
+  }
+}
+
+TEST(AtomicFile, FailingWriterLeavesNothing) {
+  const fs::path dir = TempDir("atomic");
+  const std::string target = (dir / "out.txt").string();
+  EXPECT_THROW(WriteFileAtomically(target,
+                                   [](const std::string& tmp) {
+                                     std::ofstream(tmp) << "half";
+                                     SAMP_THROW() << "interrupted";
+                                   }),
+               Error);
+  EXPECT_FALSE(fs::exists(target));
+  EXPECT_TRUE(fs::is_empty(dir)) << "temporary file left behind";
+  WriteTextFileAtomically(target, "hello");
+  std::ifstream in(target);
+  std::string content;
+  in >> content;
+  EXPECT_EQ(content, "hello");
+  fs::remove_all(dir);
+}
+
+TEST(PlyIo, WritesHeaderAndBinaryBody) {
+  const fs::path dir = TempDir("ply");
+  const std::string path = (dir / "box.ply").string();
+  WritePly(path, MakeBoxMesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1)));
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "ply");
+  // 8 vertices * 12 bytes + 12 faces * 13 bytes after the header.
+  std::ifstream whole(path, std::ios::binary);
+  const std::string all((std::istreambuf_iterator<char>(whole)), std::istreambuf_iterator<char>());
+  const size_t header_end = all.find("end_header\n") + std::string("end_header\n").size();
+  EXPECT_EQ(all.size() - header_end, 8u * 12u + 12u * 13u);
+  PointCloud cloud;
+  cloud.points.emplace_back(0, 0, 0);
+  cloud.colors.push_back({1, 2, 3});
+  cloud.colors.push_back({1, 2, 3});
+  EXPECT_THROW(WritePly((dir / "bad.ply").string(), cloud), Error);
+  fs::remove_all(dir);
+}
+
+TEST(Progress, FormatsDurations) {
+  EXPECT_EQ(Progress::FormatDuration(12.34), "12.3s");
+  EXPECT_EQ(Progress::FormatDuration(185), "3m05s");
+  EXPECT_EQ(Progress::FormatDuration(3720), "1h02m");
+}
+
+}  // namespace
+}  // namespace samp
