@@ -1,0 +1,54 @@
+// Training a shape manifold from a folder of CAD files: load, canonicalise,
+// scan, SDF, PCA, model file (docs/training.md).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "libsamp/core/grid_spec.h"
+#include "libsamp/model/pca.h"
+#include "libsamp/model/shape_model.h"
+#include "libsamp/scan/scanner.h"
+#include "libsamp/sdf/sdf.h"
+
+namespace samp {
+
+struct TrainOptions {
+  std::string cad_folder;         // searched recursively for mesh files
+  std::string manifest_path;      // optional JSON manifest ("" = none)
+  std::string output_path;        // the model .vdb
+  std::string sdf_folder;         // optional: one <name>.vdb SDF per model ("" = none)
+  GridSpec grid = GridSpec::CarDefault();
+  ScanOptions scan;
+  SdfOptions sdf;
+  PcaOptions pca;
+  int num_threads = 0;            // 0 = all cores
+  bool show_progress = true;
+
+  void Check() const;
+  std::string ToJson() const;     // the effective options, stored in the model file
+};
+
+struct TrainedShape {
+  std::string name, file;
+  bool used = false;
+  std::string reject_reason;      // why it was skipped, when !used
+  double scale = 1.0;
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();  // length, height, width after canonicalisation
+  double inside_fraction = 0.0;
+  double seconds = 0.0;
+};
+
+struct TrainSummary {
+  std::vector<TrainedShape> shapes;
+  int num_used = 0;
+  Eigen::VectorXd eigenvalues;
+  double explained_variance = 0.0;  // share of the total variance in the kept R components
+  double seconds = 0.0;
+  std::string BriefReport() const;
+};
+
+// Throws samp::Error when fewer than R + 1 usable models remain (after reporting each rejection).
+TrainSummary TrainShapeModel(const TrainOptions& options);
+
+}  // namespace samp

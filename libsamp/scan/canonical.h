@@ -1,0 +1,68 @@
+// Bringing CAD models into samp's canonical object frame (docs/canonical_frame.md):
+// metric, KITTI object frame: origin at the centre of the bottom face of the
+// bounding box, x along the length pointing to the front, y down, z along the
+// width pointing to the car's left (right-handed: z = x cross y).
+#pragma once
+
+#include <Eigen/Geometry>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "libsamp/core/mesh.h"
+
+namespace samp {
+
+// How one CAD file maps to the canonical frame. Axes are "+x", "-x", "+y",
+// "-y", "+z", "-z" in the CAD file's own coordinates, or "auto".
+struct CanonicalizeOptions {
+  // Multiplies CAD units to metres. Exclusive with target_length.
+  std::optional<double> scale;
+  // Scales so that the car's length (extent along `forward`) is this many metres.
+  std::optional<double> target_length;
+  // The CAD axis pointing up (towards the sky). "auto": the smallest extent among
+  // the two axes that are not the length... see Canonicalize().
+  std::string up = "auto";
+  // The CAD axis pointing to the front of the car. "auto": the longest horizontal extent;
+  // the sign cannot be told from the bounding box and is kept positive (a warning says so).
+  std::string forward = "auto";
+  // Plausible canonical size range for a car, metres (length, height, width).
+  Eigen::Vector3d min_size = Eigen::Vector3d(2.5, 0.9, 1.2);
+  Eigen::Vector3d max_size = Eigen::Vector3d(7.0, 2.8, 2.8);
+
+  void Check() const;
+};
+
+struct CanonicalizeResult {
+  Mesh mesh;                         // in the canonical frame, metres
+  Eigen::Affine3d object_from_cad;   // the applied transform (rotation * scale + translation)
+  double scale = 1.0;                // CAD units -> metres
+  std::string up, forward;           // the axes used (after auto-detection)
+  Eigen::Vector3d size;              // length (x), height (y), width (z) in metres
+  std::vector<std::string> warnings; // ambiguities met by auto-detection
+};
+
+// Throws samp::Error when the mesh is empty or the size after scaling is implausible.
+CanonicalizeResult Canonicalize(const Mesh& cad_mesh, const CanonicalizeOptions& options);
+
+// One entry of a training manifest (JSON, documented in docs/model_format.md).
+struct ManifestEntry {
+  std::string file;  // path relative to the manifest's folder (or the CAD folder)
+  std::string name;  // shape name; default: file stem
+  CanonicalizeOptions canonicalize;
+  bool skip = false;
+  std::string skip_reason;
+};
+
+struct Manifest {
+  // Defaults applied to files that the manifest does not list.
+  CanonicalizeOptions defaults;
+  std::vector<ManifestEntry> entries;
+  // The entry for a file (matched by relative path or file name), or nullptr.
+  const ManifestEntry* Find(const std::string& relative_path) const;
+};
+
+// Parses a manifest; throws samp::Error naming the file and the field.
+Manifest LoadManifest(const std::string& path);
+
+}  // namespace samp
