@@ -51,7 +51,9 @@ struct Track {
   std::string sequence;
   std::string type = "Car";
   StereoCalibration calibration;
-  std::vector<TrackFrame> frames;  // increasing frame numbers
+  // Increasing frame numbers, one per frame with a detection: gaps are possible
+  // where the detector missed the car (use TrackFrame::time for dt).
+  std::vector<TrackFrame> frames;
 };
 
 }  // namespace samp

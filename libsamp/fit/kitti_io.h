@@ -1,0 +1,77 @@
+// Readers and writers of the KITTI-style files of a sequence directory (see
+// docs/sequence_format.md). Every reader throws samp::Error naming the file and
+// the line (1-based) of the first problem: missing file, wrong number count,
+// a token that is not a number, NaN/inf, a detection behind the camera, a
+// disparity PNG of the wrong type or size. Nothing is silently dropped or
+// clamped. All writers are atomic (temporary file + rename). Free functions,
+// no shared state: thread-safe.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "libsamp/fit/track.h"
+
+namespace samp {
+
+// Calibration file: lines "P2: 12 numbers" and "P3: 12 numbers" (3x4 row-major
+// projection matrices of the rectified left and right colour cameras); other
+// lines are ignored. Intrinsics from P2; baseline = (P2(0,3) - P3(0,3)) / fx,
+// which must be > 0. The file carries no image size: the camera gets
+// image_width x image_height (pass the size of the images when known).
+StereoCalibration ReadCalibration(const std::string& path, int image_width = 1242,
+                                  int image_height = 375);
+// Writes "P2: ..." and "P3: ..." lines for `calibration` (P2 with zero
+// translation column, P3(0,3) = -fx * baseline).
+void WriteCalibration(const std::string& path, const StereoCalibration& calibration);
+
+// KITTI object label lines, one object per line:
+//   type trunc occ alpha x1 y1 x2 y2 h w l x y z ry [score]
+// (15 or 16 columns; score defaults to 1). frame = track_id = -1. Blank lines
+// are skipped. Rejected: other column counts, non-numbers, non-finite values,
+// x2 < x1 or y2 < y1, h/w/l < 0, and z <= 0 (behind the camera) unless the
+// type is "DontCare" (KITTI marks those with -1000 coordinates).
+std::vector<ObjectLabel> ReadLabels(const std::string& path);
+// KITTI tracking label lines: frame track_id type trunc occ alpha x1 y1 x2 y2 h w l x y z ry [score]
+// (17 or 18 columns), with the same checks; frame >= 0 and track_id >= -1.
+std::vector<ObjectLabel> ReadTrackingLabels(const std::string& path);
+// Writers of the two formats; numbers with enough digits to round-trip what
+// the tools produce (2D boxes 2 decimals, metric values 4, angles 4, score 4).
+// ObjectLabel::type is written verbatim (must be non-empty, no whitespace).
+void WriteLabels(const std::string& path, const std::vector<ObjectLabel>& labels);
+void WriteTrackingLabels(const std::string& path, const std::vector<ObjectLabel>& labels);
+// One line of either format, without newline.
+std::string FormatLabel(const ObjectLabel& label);
+std::string FormatTrackingLabel(const ObjectLabel& label);
+
+// KITTI road plane file: "# Matrix", "WIDTH 4", "HEIGHT 1", then "a b c d".
+// Returns (a, b, c, d) with the normal (a, b, c) scaled to unit length; the
+// plane is n . x + d = 0 in the camera of that frame, n pointing up (towards
+// -y), so n . x + d is the height of x above the road. A plane whose normal
+// points down is flipped and reported at debug level; a normal of zero length
+// or far from vertical (|b| < 0.5) is an error.
+Eigen::Vector4d ReadPlane(const std::string& path);
+void WritePlane(const std::string& path, const Eigen::Vector4d& plane);
+
+// Poses file: one line per frame (frame 0 first), 12 numbers, the 3x4
+// row-major matrix [R | t] mapping camera-of-frame coordinates to world.
+// R must be a rotation (orthonormal within 1e-3, det > 0).
+std::vector<Eigen::Isometry3d> ReadPoses(const std::string& path);
+void WritePoses(const std::string& path, const std::vector<Eigen::Isometry3d>& world_from_camera);
+
+// Disparity PNG: single channel uint16, disparity_px = value / 256, 0 = invalid.
+// Returns a CV_32FC1 image in pixels with 0 where invalid. Throws when the file
+// does not decode, is not 1-channel 16-bit, or (when expected_size is non-empty)
+// has another size.
+cv::Mat ReadDisparity(const std::string& path, const cv::Size& expected_size = cv::Size());
+// Writes a CV_32FC1 disparity (px; <= 0 or non-finite = invalid) as such a PNG;
+// values are rounded to 1/256 px and must be < 256 px.
+void WriteDisparity(const std::string& path, const cv::Mat& disparity_px);
+
+// Case-insensitive type comparison ("car" == "Car").
+bool SameObjectType(const std::string& a, const std::string& b);
+
+}  // namespace samp

@@ -1,0 +1,53 @@
+// Stereo points that may belong to a detected car: the candidate observations
+// of one track frame (TrackFrame::candidate_*).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <opencv2/core.hpp>
+
+#include "libsamp/fit/track.h"
+
+namespace samp {
+
+struct ObservationOptions {
+  // The detection's 2D box is enlarged by this fraction of its width/height on each side.
+  double box_margin = 0.1;
+  // Points must be higher than this above the road plane, m.
+  double min_height_above_road = 0.15;
+  // Points must be within this distance of the detected 3D box centre
+  // (bottom centre lifted by h/2), m. Larger than the paper's 3 m on purpose:
+  // the fitter gates to 3 m around the detection, and re-associates around
+  // its fitted trajectory (hard EM) from this larger set.
+  double max_distance_to_detection = 4.0;
+  // Disparities below this are ignored (too far / unreliable), px.
+  double min_disparity_px = 1.0;
+  // Disparity noise used for sigma_d = z^2 sigma_disparity / (b f), px.
+  double sigma_disparity_px = 1.0;
+  // At most this many candidates per frame (uniform subsample, seeded); 0 = all.
+  int max_points_per_frame = 5000;
+  // Seed of the subsampling; combined with the track id and frame number.
+  std::uint64_t seed = 0;
+
+  bool Check() const;
+};
+
+// Fills frame->candidate_points_in_world, candidate_sigmas and candidate_depths
+// from the pixels of `disparity_px` (CV_32FC1, 0 = invalid) inside the
+// enlarged 2D box of frame->detection, keeping points above the road
+// (frame->ground_plane_in_world) and near the detection, mapped to world by
+// frame->world_from_camera. Points are ordered by pixel (row-major) after
+// subsampling. Returns the number of points before subsampling. Does not
+// throw on an empty result (a frame may legitimately have no points).
+int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& calibration,
+                        const ObservationOptions& options, int track_id, TrackFrame* frame);
+
+// Plane transforms: a plane (n, d) in frame A (n . x_A + d = 0) to frame B
+// given b_from_a. Keeps n unit and pointing the same way.
+Eigen::Vector4d TransformPlane(const Eigen::Vector4d& plane_in_a, const Eigen::Isometry3d& b_from_a);
+
+// Centre of the detection's 3D box in its camera: position - (0, h/2, 0).
+Eigen::Vector3d DetectionCenter(const ObjectLabel& detection);
+
+}  // namespace samp

@@ -1,0 +1,127 @@
+// A sequence directory (layout in docs/sequence_format.md) and the tracks the
+// fitter gets from it:
+//   SEQ/calib/<seq>.txt, SEQ/image_2|image_3|disparity/<seq>_<ff>.png,
+//   SEQ/detections|planes/<seq>_<ff>.txt, SEQ/poses/<seq>.txt
+// Missing poses/ = static camera (identity), missing planes/<file> = RANSAC
+// road plane from the stereo points, missing disparity/<file> = StereoSGBM from
+// image_2/image_3; each substitution is logged and counted in the summary.
+// Everything else missing or malformed throws samp::Error naming the file.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <opencv2/core.hpp>
+#include <string>
+#include <vector>
+
+#include "libsamp/fit/observations.h"
+#include "libsamp/fit/road_plane.h"
+#include "libsamp/fit/stereo.h"
+#include "libsamp/fit/track.h"
+#include "libsamp/fit/tracking.h"
+
+namespace samp {
+
+struct SequenceOptions {
+  StereoOptions stereo;            // when disparity/<file> is missing
+  RoadPlaneOptions road_plane;     // when planes/<file> is missing
+  ObservationOptions observations;
+  TrackerOptions tracker;
+  // Empty: link detections/ into tracks (tracking-by-detection). Otherwise a
+  // KITTI tracking label file (frame track_id type ...) giving the tracks;
+  // detections/ is then not read.
+  std::string tracking_labels_path;
+  // Object types kept (case-insensitive); others are ignored.
+  std::vector<std::string> object_types = {"Car"};
+  // Detections with a lower score are ignored.
+  double min_detection_score = -1e300;
+  // Only frames in [first_frame, last_frame] (-1 = unbounded).
+  int first_frame = -1;
+  int last_frame = -1;
+
+  bool Check() const;
+};
+
+// Paths of one frame; empty when the file does not exist.
+struct FrameFiles {
+  int frame = 0;
+  std::string image_left, image_right, disparity, detections, plane;
+};
+
+// What a sequence directory contains (nothing read yet but the listing).
+struct SequenceFiles {
+  std::string directory;
+  std::string name;         // <seq>
+  std::string calibration;  // calib/<seq>.txt
+  std::string poses;        // poses/<seq>.txt, empty when absent
+  std::vector<FrameFiles> frames;  // increasing frame numbers
+};
+
+// Lists `directory`. <seq> is the stem of the single calib/*.txt file (or the
+// one equal to the directory name). Frames are the <ff> of every
+// <seq>_<ff>.{txt,png} in image_2, disparity and detections. Throws when the
+// directory or calib file is missing or no frame is found.
+SequenceFiles ListSequence(const std::string& directory);
+
+// One frame, read.
+struct SequenceFrame {
+  int frame = 0;
+  Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
+  Eigen::Vector4d plane_in_camera = Eigen::Vector4d(0, -1, 0, 1.65);
+  bool plane_estimated = false;      // RANSAC, no planes/ file
+  bool disparity_computed = false;   // SGBM, no disparity/ file
+  cv::Mat disparity_px;              // CV_32FC1, 0 = invalid
+  std::vector<ObjectLabel> detections;  // filtered by type and score; empty with tracking labels
+};
+
+// Reads a sequence frame by frame. Construction reads the listing,
+// calibration and poses. Not thread-safe for one instance; separate instances
+// are independent.
+class SequenceReader {
+ public:
+  SequenceReader(const std::string& directory, const SequenceOptions& options);
+
+  const SequenceFiles& files() const { return files_; }
+  const StereoCalibration& calibration() const { return calibration_; }
+  bool has_poses() const { return !poses_.empty(); }
+  int num_frames() const { return static_cast<int>(files_.frames.size()); }
+  // Ego pose of frame number `frame` (identity without poses/).
+  Eigen::Isometry3d WorldFromCamera(int frame) const;
+
+  // Detections of the frame at `index` (0..num_frames-1), filtered.
+  std::vector<ObjectLabel> ReadDetections(int index) const;
+  // Disparity, plane, pose and detections (when with_detections) of frame `index`.
+  SequenceFrame ReadFrame(int index, bool with_detections = true) const;
+
+ private:
+  SequenceOptions options_;
+  SequenceFiles files_;
+  StereoCalibration calibration_;
+  std::vector<Eigen::Isometry3d> poses_;
+};
+
+struct SequenceSummary {
+  std::string name;
+  int num_frames = 0;
+  bool poses_from_file = false;
+  bool tracks_from_labels = false;
+  int frames_with_estimated_plane = 0;
+  int frames_with_computed_disparity = 0;
+  int frames_plane_estimation_failed = 0;  // default plane used
+  TrackingSummary tracking;
+  int num_tracks = 0;
+  int num_track_frames = 0;
+  int num_track_frames_without_points = 0;
+  long long num_candidate_points = 0;
+  std::vector<std::string> messages;  // every substitution/fallback, one line each
+  std::string BriefReport() const;
+};
+
+// Reads the sequence, links tracks and fills every TrackFrame (detection,
+// time = frame / frame_rate, ego pose, ground plane in world, candidate
+// points). Tracks are ordered by id; frames by number. A TrackFrame is
+// produced only for frames with a detection (gaps are possible). Throws
+// samp::Error on bad input, naming the file.
+std::vector<Track> LoadSequenceTracks(const std::string& directory, const SequenceOptions& options,
+                                      SequenceSummary* summary = nullptr);
+
+}  // namespace samp
