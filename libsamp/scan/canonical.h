@@ -45,7 +45,7 @@ struct CanonicalizeResult {
 // Throws samp::Error when the mesh is empty or the size after scaling is implausible.
 CanonicalizeResult Canonicalize(const Mesh& cad_mesh, const CanonicalizeOptions& options);
 
-// One entry of a training manifest (JSON, documented in docs/model_format.md).
+// One entry of a training manifest (JSON, documented in docs/canonical_frame.md).
 struct ManifestEntry {
   std::string file;  // path relative to the manifest's folder (or the CAD folder)
   std::string name;  // shape name; default: file stem

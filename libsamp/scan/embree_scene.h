@@ -4,9 +4,12 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <limits>
 #include <memory>
 #include <vector>
 
+#include "libsamp/core/camera.h"
 #include "libsamp/core/mesh.h"
 
 namespace samp {
@@ -38,6 +41,17 @@ class EmbreeScene {
   void IntersectFromOrigin(const Eigen::Vector3f& origin,
                            const std::vector<Eigen::Vector3f>& directions,
                            std::vector<RayHit>* hits) const;
+  // Casts one ray per pixel centre of `camera` for the image rows [row_begin,
+  // row_end), in coherent square tiles (the fastest path). Pixel (u, v) has its
+  // centre at integer coordinates (OpenCV/KITTI convention): the ray direction in
+  // the camera is normalize(camera.Ray(u, v)), in the scene world_from_camera.linear()
+  // times that. Writes hits[(v - row_begin) * width + u]; `hits` must hold
+  // (row_end - row_begin) * width entries. Thread-safe.
+  void IntersectCamera(const PinholeCamera& camera, const Eigen::Isometry3d& world_from_camera,
+                       int row_begin, int row_end, RayHit* hits) const;
+
+  // Number of rays per Embree packet used (16, 8 or 4, the widest the CPU runs natively).
+  int PacketSize() const;
 
  private:
   struct Impl;

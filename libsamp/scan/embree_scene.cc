@@ -1,0 +1,329 @@
+#include "libsamp/scan/embree_scene.h"
+
+#include <embree3/rtcore.h>
+
+#include <algorithm>
+#include <cmath>
+#include <mutex>
+#include <string>
+
+#include "libsamp/core/error.h"
+
+namespace samp {
+namespace {
+
+const char* ErrorName(RTCError code) {
+  switch (code) {
+    case RTC_ERROR_NONE: return "no error";
+    case RTC_ERROR_UNKNOWN: return "unknown error";
+    case RTC_ERROR_INVALID_ARGUMENT: return "invalid argument";
+    case RTC_ERROR_INVALID_OPERATION: return "invalid operation";
+    case RTC_ERROR_OUT_OF_MEMORY: return "out of memory";
+    case RTC_ERROR_UNSUPPORTED_CPU: return "unsupported CPU";
+    case RTC_ERROR_CANCELLED: return "cancelled";
+  }
+  return "unrecognised error code";
+}
+
+// Packet types and intersectors of Embree, by width.
+template <int N>
+struct Packet;
+template <>
+struct Packet<4> {
+  using Type = RTCRayHit4;
+  static void Intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, Type* rays) {
+    rtcIntersect4(valid, scene, context, rays);
+  }
+  // Tile shape for camera rays.
+  static constexpr int kTileWidth = 2, kTileHeight = 2;
+};
+template <>
+struct Packet<8> {
+  using Type = RTCRayHit8;
+  static void Intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, Type* rays) {
+    rtcIntersect8(valid, scene, context, rays);
+  }
+  static constexpr int kTileWidth = 4, kTileHeight = 2;
+};
+template <>
+struct Packet<16> {
+  using Type = RTCRayHit16;
+  static void Intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, Type* rays) {
+    rtcIntersect16(valid, scene, context, rays);
+  }
+  static constexpr int kTileWidth = 4, kTileHeight = 4;
+};
+
+// Casts `num_rays` rays in packets of N. `ray(i, &origin, &direction)` gives
+// ray i (direction unit length); `out(i)` is where its hit goes.
+template <int N, typename RayFn, typename OutFn>
+void TracePackets(RTCScene scene, int64_t num_rays, float t_far, bool coherent, const RayFn& ray,
+                  const OutFn& out) {
+  using P = Packet<N>;
+  alignas(64) typename P::Type packet;
+  alignas(64) int valid[N];
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = coherent ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  Eigen::Vector3f origin = Eigen::Vector3f::Zero(), direction = Eigen::Vector3f::UnitZ();
+  for (int64_t begin = 0; begin < num_rays; begin += N) {
+    const int count = int(std::min<int64_t>(N, num_rays - begin));
+    for (int j = 0; j < N; ++j) {
+      if (j < count) {
+        ray(begin + j, &origin, &direction);
+        valid[j] = -1;
+      } else {
+        valid[j] = 0;
+      }
+      packet.ray.org_x[j] = origin.x();
+      packet.ray.org_y[j] = origin.y();
+      packet.ray.org_z[j] = origin.z();
+      packet.ray.dir_x[j] = direction.x();
+      packet.ray.dir_y[j] = direction.y();
+      packet.ray.dir_z[j] = direction.z();
+      packet.ray.tnear[j] = 0.f;
+      packet.ray.tfar[j] = t_far;
+      packet.ray.time[j] = 0.f;
+      packet.ray.mask[j] = ~0u;
+      packet.ray.id[j] = unsigned(j);
+      packet.ray.flags[j] = 0;
+      packet.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+      packet.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+    }
+    P::Intersect(valid, scene, &context, &packet);
+    for (int j = 0; j < count; ++j) {
+      RayHit& hit = out(begin + j);
+      if (packet.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID) {
+        hit = RayHit();
+        continue;
+      }
+      hit.t = packet.ray.tfar[j];
+      hit.geometry = int(packet.hit.geomID[j]);
+      hit.triangle = int(packet.hit.primID[j]);
+      Eigen::Vector3f normal(packet.hit.Ng_x[j], packet.hit.Ng_y[j], packet.hit.Ng_z[j]);
+      const float norm = normal.norm();
+      if (norm > 0.f) normal /= norm;
+      const Eigen::Vector3f ray_direction(packet.ray.dir_x[j], packet.ray.dir_y[j],
+                                          packet.ray.dir_z[j]);
+      if (normal.dot(ray_direction) > 0.f) normal = -normal;
+      hit.normal = normal;
+    }
+  }
+}
+
+}  // namespace
+
+struct EmbreeScene::Impl {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  int packet_size = 4;
+  std::mutex error_mutex;
+  std::string error;  // first error reported by the callback since the last check
+
+  static void OnError(void* user, RTCError code, const char* message) {
+    Impl* impl = static_cast<Impl*>(user);
+    std::lock_guard<std::mutex> lock(impl->error_mutex);
+    if (impl->error.empty()) {
+      impl->error = std::string(ErrorName(code)) + (message ? std::string(": ") + message : "");
+    }
+  }
+
+  // Throws samp::Error when the callback recorded an error during `what`.
+  void ThrowIfError(const char* what) {
+    std::string message;
+    {
+      std::lock_guard<std::mutex> lock(error_mutex);
+      message.swap(error);
+    }
+    if (message.empty() && device != nullptr) {
+      const RTCError code = rtcGetDeviceError(device);
+      if (code != RTC_ERROR_NONE) message = ErrorName(code);
+    }
+    SAMP_CHECK(message.empty()) << "Embree error in " << what << ": " << message;
+  }
+
+  ~Impl() {
+    if (scene != nullptr) rtcReleaseScene(scene);
+    if (device != nullptr) rtcReleaseDevice(device);
+  }
+};
+
+EmbreeScene::EmbreeScene(const std::vector<const Mesh*>& meshes) : impl_(std::make_unique<Impl>()) {
+  impl_->device = rtcNewDevice(nullptr);
+  if (impl_->device == nullptr) {
+    SAMP_THROW() << "cannot create an Embree device: " << ErrorName(rtcGetDeviceError(nullptr));
+  }
+  rtcSetDeviceErrorFunction(impl_->device, &Impl::OnError, impl_.get());
+  if (rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY16_SUPPORTED)) {
+    impl_->packet_size = 16;
+  } else if (rtcGetDeviceProperty(impl_->device, RTC_DEVICE_PROPERTY_NATIVE_RAY8_SUPPORTED)) {
+    impl_->packet_size = 8;
+  } else {
+    impl_->packet_size = 4;
+  }
+
+  impl_->scene = rtcNewScene(impl_->device);
+  impl_->ThrowIfError("rtcNewScene");
+  // Robust traversal: rays through shared edges/vertices never slip between triangles.
+  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+
+  for (size_t id = 0; id < meshes.size(); ++id) {
+    const Mesh* mesh = meshes[id];
+    if (mesh == nullptr || mesh->Empty()) continue;  // keeps ids = indices; nothing to hit
+    const int64_t num_vertices = int64_t(mesh->vertices.size());
+    for (const Eigen::Vector3i& t : mesh->triangles) {
+      SAMP_CHECK((t.array() >= 0).all() && (t.array().cast<int64_t>() < num_vertices).all())
+          << "EmbreeScene: mesh " << id << " has a triangle index out of range";
+    }
+    RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    impl_->ThrowIfError("rtcNewGeometry");
+    // Embree copies into buffers it owns; they outlive `mesh`.
+    float* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), num_vertices));
+    unsigned* indices = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                3 * sizeof(unsigned), mesh->triangles.size()));
+    if (vertices == nullptr || indices == nullptr) {
+      rtcReleaseGeometry(geometry);
+      impl_->ThrowIfError("rtcSetNewGeometryBuffer");
+      SAMP_THROW() << "EmbreeScene: cannot allocate geometry buffers for mesh " << id;
+    }
+    for (int64_t v = 0; v < num_vertices; ++v) {
+      const Eigen::Vector3f& p = mesh->vertices[v];
+      SAMP_CHECK(p.allFinite()) << "EmbreeScene: mesh " << id << " has a non-finite vertex";
+      vertices[3 * v + 0] = p.x();
+      vertices[3 * v + 1] = p.y();
+      vertices[3 * v + 2] = p.z();
+    }
+    for (size_t f = 0; f < mesh->triangles.size(); ++f) {
+      for (int c = 0; c < 3; ++c) indices[3 * f + c] = unsigned(mesh->triangles[f][c]);
+    }
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometryByID(impl_->scene, geometry, unsigned(id));
+    rtcReleaseGeometry(geometry);  // the scene holds it now
+    impl_->ThrowIfError("adding a triangle mesh");
+  }
+  rtcCommitScene(impl_->scene);
+  impl_->ThrowIfError("rtcCommitScene");
+}
+
+EmbreeScene::~EmbreeScene() = default;
+
+int EmbreeScene::PacketSize() const { return impl_->packet_size; }
+
+namespace {
+
+template <int N>
+void IntersectRays(RTCScene scene, const std::vector<Eigen::Vector3f>& origins,
+                   const std::vector<Eigen::Vector3f>& directions, float t_far, RayHit* hits) {
+  TracePackets<N>(
+      scene, int64_t(origins.size()), t_far, /*coherent=*/false,
+      [&](int64_t i, Eigen::Vector3f* origin, Eigen::Vector3f* direction) {
+        *origin = origins[i];
+        *direction = directions[i];
+      },
+      [&](int64_t i) -> RayHit& { return hits[i]; });
+}
+
+template <int N>
+void IntersectOrigin(RTCScene scene, const Eigen::Vector3f& origin,
+                     const std::vector<Eigen::Vector3f>& directions, RayHit* hits) {
+  TracePackets<N>(
+      scene, int64_t(directions.size()), std::numeric_limits<float>::infinity(), /*coherent=*/true,
+      [&](int64_t i, Eigen::Vector3f* o, Eigen::Vector3f* direction) {
+        *o = origin;
+        *direction = directions[i];
+      },
+      [&](int64_t i) -> RayHit& { return hits[i]; });
+}
+
+// Pixels in tiles of Packet<N>::kTileWidth x kTileHeight, row-major tiles within
+// the row band; rays outside the image are masked off by TracePackets' count,
+// so partial tiles at the right/bottom border are handled by a per-tile pass.
+template <int N>
+void IntersectCameraTiles(RTCScene scene, const PinholeCamera& camera,
+                          const Eigen::Isometry3d& world_from_camera, int row_begin, int row_end,
+                          RayHit* hits) {
+  constexpr int kTw = Packet<N>::kTileWidth, kTh = Packet<N>::kTileHeight;
+  const Eigen::Matrix3f rotation = world_from_camera.linear().cast<float>();
+  const Eigen::Vector3f origin = world_from_camera.translation().cast<float>();
+  const float inv_fx = float(1.0 / camera.fx), inv_fy = float(1.0 / camera.fy);
+  const float cx = float(camera.cx), cy = float(camera.cy);
+  const int width = camera.width;
+  const int tiles_x = (width + kTw - 1) / kTw;
+  for (int v0 = row_begin; v0 < row_end; v0 += kTh) {
+    const int tile_rows = std::min(kTh, row_end - v0);
+    for (int tx = 0; tx < tiles_x; ++tx) {
+      const int u0 = tx * kTw;
+      const int tile_cols = std::min(kTw, width - u0);
+      // Lanes of a partial tile are packed densely: lane j -> (j % tile_cols, j / tile_cols).
+      const int count = tile_cols * tile_rows;
+      TracePackets<N>(
+          scene, count, std::numeric_limits<float>::infinity(), /*coherent=*/true,
+          [&](int64_t j, Eigen::Vector3f* o, Eigen::Vector3f* direction) {
+            const int u = u0 + int(j) % tile_cols, v = v0 + int(j) / tile_cols;
+            const Eigen::Vector3f d((float(u) - cx) * inv_fx, (float(v) - cy) * inv_fy, 1.f);
+            *o = origin;
+            *direction = rotation * d.normalized();
+          },
+          [&](int64_t j) -> RayHit& {
+            const int u = u0 + int(j) % tile_cols, v = v0 + int(j) / tile_cols;
+            return hits[int64_t(v - row_begin) * width + u];
+          });
+    }
+  }
+}
+
+}  // namespace
+
+void EmbreeScene::Intersect(const std::vector<Eigen::Vector3f>& origins,
+                            const std::vector<Eigen::Vector3f>& directions,
+                            std::vector<RayHit>* hits, float t_far) const {
+  SAMP_CHECK(origins.size() == directions.size())
+      << "EmbreeScene::Intersect: " << origins.size() << " origins but " << directions.size()
+      << " directions";
+  hits->resize(origins.size());
+  switch (impl_->packet_size) {
+    case 16: IntersectRays<16>(impl_->scene, origins, directions, t_far, hits->data()); break;
+    case 8: IntersectRays<8>(impl_->scene, origins, directions, t_far, hits->data()); break;
+    default: IntersectRays<4>(impl_->scene, origins, directions, t_far, hits->data()); break;
+  }
+  impl_->ThrowIfError("rtcIntersect");
+}
+
+void EmbreeScene::IntersectFromOrigin(const Eigen::Vector3f& origin,
+                                      const std::vector<Eigen::Vector3f>& directions,
+                                      std::vector<RayHit>* hits) const {
+  hits->resize(directions.size());
+  switch (impl_->packet_size) {
+    case 16: IntersectOrigin<16>(impl_->scene, origin, directions, hits->data()); break;
+    case 8: IntersectOrigin<8>(impl_->scene, origin, directions, hits->data()); break;
+    default: IntersectOrigin<4>(impl_->scene, origin, directions, hits->data()); break;
+  }
+  impl_->ThrowIfError("rtcIntersect");
+}
+
+void EmbreeScene::IntersectCamera(const PinholeCamera& camera,
+                                  const Eigen::Isometry3d& world_from_camera, int row_begin,
+                                  int row_end, RayHit* hits) const {
+  SAMP_CHECK(camera.width > 0 && camera.height > 0 && camera.fx > 0 && camera.fy > 0)
+      << "EmbreeScene::IntersectCamera: invalid camera " << camera.width << "x" << camera.height;
+  SAMP_CHECK(0 <= row_begin && row_begin <= row_end && row_end <= camera.height)
+      << "EmbreeScene::IntersectCamera: rows [" << row_begin << ", " << row_end
+      << ") outside the image of height " << camera.height;
+  switch (impl_->packet_size) {
+    case 16:
+      IntersectCameraTiles<16>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits);
+      break;
+    case 8:
+      IntersectCameraTiles<8>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits);
+      break;
+    default:
+      IntersectCameraTiles<4>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits);
+      break;
+  }
+  impl_->ThrowIfError("rtcIntersect");
+}
+
+}  // namespace samp

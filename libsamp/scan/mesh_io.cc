@@ -1,0 +1,175 @@
+#include "libsamp/scan/mesh_io.h"
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+
+#include <algorithm>
+#include <assimp/Exporter.hpp>
+#include <assimp/Importer.hpp>
+#include <cctype>
+#include <filesystem>
+#include <system_error>
+
+#include "libsamp/core/atomic_file.h"
+#include "libsamp/core/error.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string LowerExtension(const std::string& path) {
+  std::string extension = fs::path(path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return char(std::tolower(c)); });
+  return extension;
+}
+
+// Appends the triangles of every mesh referenced by `node` and its children,
+// with the accumulated node transform applied.
+void FlattenNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& parent_transform,
+                 Mesh* out) {
+  const aiMatrix4x4 transform = parent_transform * node.mTransformation;
+  for (unsigned int k = 0; k < node.mNumMeshes; ++k) {
+    const aiMesh& mesh = *scene.mMeshes[node.mMeshes[k]];
+    if (!(mesh.mPrimitiveTypes & aiPrimitiveType_TRIANGLE)) continue;
+    const int offset = int(out->vertices.size());
+    out->vertices.reserve(out->vertices.size() + mesh.mNumVertices);
+    for (unsigned int v = 0; v < mesh.mNumVertices; ++v) {
+      const aiVector3D p = transform * mesh.mVertices[v];
+      out->vertices.emplace_back(p.x, p.y, p.z);
+    }
+    for (unsigned int f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices != 3) continue;  // lines and points (SortByPType keeps them apart)
+      out->triangles.emplace_back(offset + int(face.mIndices[0]), offset + int(face.mIndices[1]),
+                                  offset + int(face.mIndices[2]));
+    }
+  }
+  for (unsigned int c = 0; c < node.mNumChildren; ++c) {
+    FlattenNode(scene, *node.mChildren[c], transform, out);
+  }
+}
+
+// The assimp exporter id for an output extension.
+std::string ExportFormatId(const std::string& path) {
+  const std::string extension = LowerExtension(path);
+  if (extension == ".ply") return "plyb";
+  if (extension == ".obj") return "objnomtl";
+  if (extension == ".stl") return "stlb";
+  if (extension == ".glb") return "glb2";
+  if (extension == ".gltf") return "gltf2";
+  SAMP_THROW() << "cannot export mesh to '" << path << "': unsupported extension '" << extension
+               << "' (use .ply, .obj, .stl, .glb or .gltf)";
+}
+
+}  // namespace
+
+Mesh LoadMesh(const std::string& path) {
+  std::error_code ec;
+  SAMP_CHECK(fs::is_regular_file(path, ec)) << "cannot read mesh '" << path << "': no such file";
+  Assimp::Importer importer;
+  // Drop lines and points entirely; keep only triangles after triangulation.
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const unsigned int flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                             aiProcess_SortByPType | aiProcess_FindDegenerates |
+                             aiProcess_ValidateDataStructure;
+  const aiScene* scene = importer.ReadFile(path, flags);
+  if (scene == nullptr) {
+    SAMP_THROW() << "cannot read mesh '" << path << "': " << importer.GetErrorString();
+  }
+  SAMP_CHECK(!(scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) && scene->mRootNode != nullptr)
+      << "cannot read mesh '" << path << "': assimp returned an incomplete scene";
+  Mesh mesh;
+  FlattenNode(*scene, *scene->mRootNode, aiMatrix4x4(), &mesh);
+  SAMP_CHECK(!mesh.triangles.empty()) << "mesh '" << path << "' holds no triangles";
+  for (const Eigen::Vector3f& v : mesh.vertices) {
+    SAMP_CHECK(v.allFinite()) << "mesh '" << path << "' has non-finite vertex coordinates";
+  }
+  return mesh;
+}
+
+bool IsMeshFile(const std::string& path) {
+  const std::string extension = LowerExtension(path);
+  if (extension.size() < 2) return false;
+  Assimp::Importer importer;
+  return importer.IsExtensionSupported(extension);
+}
+
+void ExportMesh(const std::string& path, const Mesh& mesh) {
+  const std::string format = ExportFormatId(path);
+  SAMP_CHECK(!mesh.Empty()) << "cannot export an empty mesh to '" << path << "'";
+  const int num_vertices = int(mesh.vertices.size());
+  for (const Eigen::Vector3i& t : mesh.triangles) {
+    SAMP_CHECK((t.array() >= 0).all() && (t.array() < num_vertices).all())
+        << "cannot export mesh to '" << path << "': triangle index out of range";
+  }
+
+  // A minimal scene: one mesh, one default material, one root node. aiScene's
+  // destructor frees everything allocated here.
+  aiScene scene;
+  scene.mNumMaterials = 1;
+  scene.mMaterials = new aiMaterial*[1];
+  scene.mMaterials[0] = new aiMaterial();
+  scene.mNumMeshes = 1;
+  scene.mMeshes = new aiMesh*[1];
+  aiMesh* out = new aiMesh();
+  scene.mMeshes[0] = out;
+  out->mMaterialIndex = 0;
+  out->mPrimitiveTypes = aiPrimitiveType_TRIANGLE;
+  out->mNumVertices = unsigned(num_vertices);
+  out->mVertices = new aiVector3D[num_vertices];
+  for (int v = 0; v < num_vertices; ++v) {
+    out->mVertices[v] = aiVector3D(mesh.vertices[v].x(), mesh.vertices[v].y(), mesh.vertices[v].z());
+  }
+  out->mNumFaces = unsigned(mesh.triangles.size());
+  out->mFaces = new aiFace[mesh.triangles.size()];
+  for (size_t f = 0; f < mesh.triangles.size(); ++f) {
+    aiFace& face = out->mFaces[f];
+    face.mNumIndices = 3;
+    face.mIndices = new unsigned int[3];
+    for (int c = 0; c < 3; ++c) face.mIndices[c] = unsigned(mesh.triangles[f][c]);
+  }
+  scene.mRootNode = new aiNode();
+  scene.mRootNode->mNumMeshes = 1;
+  scene.mRootNode->mMeshes = new unsigned int[1];
+  scene.mRootNode->mMeshes[0] = 0;
+
+  WriteFileAtomically(path, [&](const std::string& temporary_path) {
+    // Some exporters (glTF) write side files named after the output (e.g. the
+    // .bin buffer). Export into a private folder under the final file name, move
+    // the side files beside the target, then hand the main file back.
+    const fs::path target(path);
+    const fs::path folder = fs::path(temporary_path).string() + ".d";
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    SAMP_CHECK(!ec) << "cannot create " << folder.string() << ": " << ec.message();
+    struct Cleanup {
+      fs::path folder;
+      ~Cleanup() {
+        std::error_code ignored;
+        fs::remove_all(folder, ignored);
+      }
+    } cleanup{folder};
+    const fs::path main_file = folder / target.filename();
+    Assimp::Exporter exporter;
+    if (exporter.Export(&scene, format, main_file.string()) != AI_SUCCESS) {
+      SAMP_THROW() << "cannot export mesh to '" << path << "': " << exporter.GetErrorString();
+    }
+    SAMP_CHECK(fs::exists(main_file)) << "cannot export mesh to '" << path
+                                      << "': assimp wrote no file";
+    for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
+      if (entry.path() == main_file) continue;
+      const fs::path destination =
+          (target.has_parent_path() ? target.parent_path() : fs::path(".")) / entry.path().filename();
+      fs::rename(entry.path(), destination, ec);
+      SAMP_CHECK(!ec) << "cannot move " << entry.path().string() << " to " << destination.string()
+                      << ": " << ec.message();
+    }
+    fs::rename(main_file, temporary_path, ec);
+    SAMP_CHECK(!ec) << "cannot move " << main_file.string() << " to " << temporary_path << ": "
+                    << ec.message();
+  });
+}
+
+}  // namespace samp

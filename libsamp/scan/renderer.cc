@@ -1,0 +1,107 @@
+#include "libsamp/scan/renderer.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "libsamp/core/error.h"
+#include "libsamp/scan/embree_scene.h"
+
+namespace samp {
+
+RenderBuffers Render(const PinholeCamera& camera, const std::vector<PlacedMesh>& meshes) {
+  SAMP_CHECK(camera.width > 0 && camera.height > 0 && camera.fx > 0 && camera.fy > 0)
+      << "Render: invalid camera (" << camera.width << "x" << camera.height << ", fx " << camera.fx
+      << ", fy " << camera.fy << ")";
+  // The scene is built in the camera frame, so rays start at the origin and
+  // normals come out in the camera frame directly.
+  std::vector<Mesh> meshes_in_camera(meshes.size());
+  std::vector<const Mesh*> scene_meshes(meshes.size(), nullptr);
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    if (meshes[i].mesh == nullptr || meshes[i].mesh->Empty()) continue;
+    meshes_in_camera[i] = *meshes[i].mesh;
+    meshes_in_camera[i].Transform(Eigen::Affine3d(meshes[i].camera_from_object));
+    scene_meshes[i] = &meshes_in_camera[i];
+  }
+  const EmbreeScene scene(scene_meshes);
+
+  RenderBuffers buffers;
+  buffers.width = camera.width;
+  buffers.height = camera.height;
+  const size_t num_pixels = size_t(camera.width) * camera.height;
+  buffers.depth.resize(num_pixels);
+  buffers.mesh_index.resize(num_pixels);
+  buffers.triangle.resize(num_pixels);
+  buffers.normal.resize(num_pixels);
+
+  // Bands of rows (a multiple of the packet tile height) in parallel.
+  constexpr int kBandRows = 8;
+  const int num_bands = (camera.height + kBandRows - 1) / kBandRows;
+  tbb::parallel_for(tbb::blocked_range<int>(0, num_bands), [&](const tbb::blocked_range<int>& range) {
+    std::vector<RayHit> hits;
+    for (int band = range.begin(); band != range.end(); ++band) {
+      const int row_begin = band * kBandRows;
+      const int row_end = std::min(camera.height, row_begin + kBandRows);
+      hits.resize(size_t(row_end - row_begin) * camera.width);
+      scene.IntersectCamera(camera, Eigen::Isometry3d::Identity(), row_begin, row_end, hits.data());
+      for (int v = row_begin; v < row_end; ++v) {
+        const float ray_y = float((v - camera.cy) / camera.fy);
+        for (int u = 0; u < camera.width; ++u) {
+          const size_t pixel = size_t(v) * camera.width + u;
+          const RayHit& hit = hits[size_t(v - row_begin) * camera.width + u];
+          if (hit.Hit()) {
+            const float ray_x = float((u - camera.cx) / camera.fx);
+            // t is along the unit direction; z = t / |(x, y, 1)|.
+            buffers.depth[pixel] = hit.t / std::sqrt(ray_x * ray_x + ray_y * ray_y + 1.f);
+            buffers.mesh_index[pixel] = hit.geometry;
+            buffers.triangle[pixel] = hit.triangle;
+            buffers.normal[pixel] = hit.normal;
+          } else {
+            buffers.depth[pixel] = std::numeric_limits<float>::infinity();
+            buffers.mesh_index[pixel] = -1;
+            buffers.triangle[pixel] = -1;
+            buffers.normal[pixel] = Eigen::Vector3f::Zero();
+          }
+        }
+      }
+    }
+  });
+  return buffers;
+}
+
+std::vector<uint8_t> ShadeRender(const RenderBuffers& buffers,
+                                 const std::vector<Eigen::Vector3f>& colors) {
+  const size_t num_pixels = size_t(buffers.width) * buffers.height;
+  SAMP_CHECK(buffers.depth.size() == num_pixels && buffers.mesh_index.size() == num_pixels &&
+             buffers.normal.size() == num_pixels)
+      << "ShadeRender: buffers do not match their size " << buffers.width << "x" << buffers.height;
+  // Headlight along the viewing axis plus a key light from above-left-behind the
+  // camera (camera frame: x right, y down, z forward; vectors point to the light).
+  const Eigen::Vector3f headlight(0.f, 0.f, -1.f);
+  const Eigen::Vector3f key_light = Eigen::Vector3f(-0.4f, -0.8f, -0.45f).normalized();
+  constexpr float kAmbient = 0.2f, kHeadlight = 0.55f, kKey = 0.35f;
+  const Eigen::Vector3f default_color(0.7f, 0.7f, 0.7f);
+  std::vector<uint8_t> rgb(3 * num_pixels, 255);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, num_pixels, 4096),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      for (size_t i = range.begin(); i != range.end(); ++i) {
+                        const int index = buffers.mesh_index[i];
+                        if (index < 0) continue;
+                        const Eigen::Vector3f& n = buffers.normal[i];
+                        const float light = kAmbient + kHeadlight * std::max(0.f, n.dot(headlight)) +
+                                            kKey * std::max(0.f, n.dot(key_light));
+                        const Eigen::Vector3f& base =
+                            size_t(index) < colors.size() ? colors[index] : default_color;
+                        for (int c = 0; c < 3; ++c) {
+                          const float value = std::clamp(base[c] * light, 0.f, 1.f);
+                          rgb[3 * i + c] = uint8_t(std::lround(255.f * value));
+                        }
+                      }
+                    });
+  return rgb;
+}
+
+}  // namespace samp

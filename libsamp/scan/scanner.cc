@@ -1,0 +1,141 @@
+#include "libsamp/scan/scanner.h"
+
+#include <cmath>
+#include <limits>
+
+#include "libsamp/core/error.h"
+#include "libsamp/scan/embree_scene.h"
+
+namespace samp {
+
+void ScanOptions::Check() const {
+  SAMP_CHECK(num_views >= 1) << "scan: num_views must be >= 1, got " << num_views;
+  SAMP_CHECK(width >= 1 && height >= 1)
+      << "scan: width and height must be >= 1, got " << width << "x" << height;
+  SAMP_CHECK(int64_t(width) * height <= (int64_t(1) << 26))
+      << "scan: width*height too large (" << width << "x" << height << ")";
+  SAMP_CHECK(fov_deg > 0 && fov_deg < 180) << "scan: fov_deg must be in (0, 180), got " << fov_deg;
+  SAMP_CHECK(distance_factor > 1.0)
+      << "scan: distance_factor must be > 1 (cameras outside the bounding sphere), got "
+      << distance_factor;
+}
+
+std::vector<Eigen::Vector3d> FibonacciSphere(int n) {
+  SAMP_CHECK(n >= 1) << "FibonacciSphere: n must be >= 1, got " << n;
+  // Equal-area latitude bands z_i = 1 - (2i + 1) / n, longitudes stepped by the golden angle.
+  const double golden_angle = M_PI * (3.0 - std::sqrt(5.0));
+  std::vector<Eigen::Vector3d> directions(n);
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / n;
+    const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+    const double phi = golden_angle * i;
+    directions[i] = Eigen::Vector3d(r * std::cos(phi), r * std::sin(phi), z);
+  }
+  return directions;
+}
+
+namespace {
+
+// A camera at `eye` looking at `target`. The image's down direction (camera y)
+// is the object's +y (down in the canonical frame) projected onto the image
+// plane, so cars appear upright; within ~8 degrees of the vertical the object's
+// +z serves as reference instead (a deterministic, continuous-enough choice).
+Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - eye).normalized();
+  Eigen::Vector3d reference = Eigen::Vector3d::UnitY();
+  if (std::abs(z.dot(reference)) > 0.99) reference = Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d x = reference.cross(z).normalized();
+  const Eigen::Vector3d y = z.cross(x);
+  Eigen::Isometry3d object_from_camera = Eigen::Isometry3d::Identity();
+  object_from_camera.linear().col(0) = x;
+  object_from_camera.linear().col(1) = y;
+  object_from_camera.linear().col(2) = z;
+  object_from_camera.translation() = eye;
+  return object_from_camera;
+}
+
+}  // namespace
+
+ScanResult ScanMesh(const Mesh& mesh, const ScanOptions& options) {
+  options.Check();
+  SAMP_CHECK(!mesh.Empty()) << "ScanMesh: the mesh is empty";
+  const AlignedBox box = mesh.Bounds();
+  const Eigen::Vector3d center = box.Center();
+  const double radius = 0.5 * box.Size().norm();
+  SAMP_CHECK(std::isfinite(radius) && radius > 0) << "ScanMesh: the mesh has zero extent";
+
+  const EmbreeScene scene(mesh);
+
+  PinholeCamera camera;
+  camera.width = options.width;
+  camera.height = options.height;
+  // The field of view spans the smaller image side.
+  const double focal =
+      0.5 * std::min(options.width, options.height) / std::tan(0.5 * options.fov_deg * M_PI / 180.0);
+  camera.fx = camera.fy = focal;
+  camera.cx = 0.5 * (options.width - 1);
+  camera.cy = 0.5 * (options.height - 1);
+
+  // Per pixel: z component of the unit ray direction (depth = t * z).
+  const int64_t num_pixels = int64_t(options.width) * options.height;
+  std::vector<float> ray_z(num_pixels);
+  for (int v = 0; v < options.height; ++v) {
+    for (int u = 0; u < options.width; ++u) {
+      ray_z[int64_t(v) * options.width + u] = float(1.0 / camera.Ray(u, v).norm());
+    }
+  }
+
+  ScanResult result;
+  result.triangle_seen.assign(mesh.triangles.size(), 0);
+  result.views.reserve(options.num_views);
+  std::vector<RayHit> hits(num_pixels);
+  const double distance = options.distance_factor * radius;
+  for (const Eigen::Vector3d& direction : FibonacciSphere(options.num_views)) {
+    const Eigen::Isometry3d object_from_camera = LookAt(center + distance * direction, center);
+    scene.IntersectCamera(camera, object_from_camera, 0, options.height, hits.data());
+    ScanView view;
+    view.camera = camera;
+    view.camera_from_object = object_from_camera.inverse();
+    view.depth.resize(num_pixels);
+    view.triangle.resize(num_pixels);
+    for (int64_t i = 0; i < num_pixels; ++i) {
+      const RayHit& hit = hits[i];
+      if (hit.Hit()) {
+        view.depth[i] = hit.t * ray_z[i];
+        view.triangle[i] = hit.triangle;
+        result.triangle_seen[hit.triangle] = 1;
+        ++result.num_hits;
+      } else {
+        view.depth[i] = std::numeric_limits<float>::infinity();
+        view.triangle[i] = -1;
+      }
+    }
+    result.num_rays += num_pixels;
+    result.views.push_back(std::move(view));
+  }
+  return result;
+}
+
+PointCloud ScanResult::SurfacePoints() const {
+  PointCloud cloud;
+  cloud.points.reserve(size_t(num_hits));
+  for (const ScanView& view : views) {
+    const PinholeCamera& camera = view.camera;
+    const Eigen::Isometry3d object_from_camera = view.camera_from_object.inverse();
+    const Eigen::Matrix3f rotation = object_from_camera.linear().cast<float>();
+    const Eigen::Vector3f translation = object_from_camera.translation().cast<float>();
+    const float inv_fx = float(1.0 / camera.fx), inv_fy = float(1.0 / camera.fy);
+    for (int v = 0; v < camera.height; ++v) {
+      for (int u = 0; u < camera.width; ++u) {
+        const float depth = view.depth[int64_t(v) * camera.width + u];
+        if (!std::isfinite(depth)) continue;
+        const Eigen::Vector3f point_in_camera(depth * (float(u) - float(camera.cx)) * inv_fx,
+                                              depth * (float(v) - float(camera.cy)) * inv_fy, depth);
+        cloud.points.push_back(rotation * point_in_camera + translation);
+      }
+    }
+  }
+  return cloud;
+}
+
+}  // namespace samp
