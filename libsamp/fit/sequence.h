@@ -69,6 +69,8 @@ struct SequenceFrame {
   Eigen::Vector4d plane_in_camera = Eigen::Vector4d(0, -1, 0, 1.65);
   bool plane_estimated = false;      // RANSAC, no planes/ file
   bool disparity_computed = false;   // SGBM, no disparity/ file
+  bool plane_estimation_failed = false;  // RANSAC failed: KITTI default plane used
+  std::vector<std::string> notes;    // each substitution made, one line each (also logged)
   cv::Mat disparity_px;              // CV_32FC1, 0 = invalid
   std::vector<ObjectLabel> detections;  // filtered by type and score; empty with tracking labels
 };

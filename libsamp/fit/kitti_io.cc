@@ -1,0 +1,429 @@
+#include "libsamp/fit/kitti_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include <Eigen/SVD>
+#include <opencv2/imgcodecs.hpp>
+
+#include "libsamp/core/atomic_file.h"
+#include "libsamp/core/error.h"
+#include "libsamp/core/log.h"
+
+namespace samp {
+namespace {
+
+// A text file read into lines, for parsers that report "path:line: problem".
+struct TextFile {
+  std::string path;
+  std::vector<std::string> lines;
+};
+
+TextFile ReadTextFile(const std::string& path, const char* what) {
+  std::ifstream stream(path);
+  SAMP_CHECK(stream.good()) << "cannot open " << what << " file " << path;
+  TextFile file{path, {}};
+  std::string line;
+  while (std::getline(stream, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    file.lines.push_back(line);
+  }
+  SAMP_CHECK(!stream.bad()) << "error reading " << what << " file " << path;
+  return file;
+}
+
+std::vector<std::string> Tokenize(const std::string& line) {
+  std::istringstream stream(line);
+  std::vector<std::string> tokens;
+  std::string token;
+  while (stream >> token) tokens.push_back(token);
+  return tokens;
+}
+
+bool IsBlank(const std::string& line) {
+  return std::all_of(line.begin(), line.end(), [](unsigned char c) { return std::isspace(c); });
+}
+
+// Location prefix of messages: "path:line: ".
+std::string At(const std::string& path, int line_number) {
+  return path + ":" + std::to_string(line_number) + ": ";
+}
+
+double ParseDouble(const std::string& token, const std::string& path, int line_number,
+                   const char* field) {
+  errno = 0;
+  char* end = nullptr;
+  const double value = std::strtod(token.c_str(), &end);
+  SAMP_CHECK(end != token.c_str() && *end == '\0')
+      << At(path, line_number) << field << " '" << token << "' is not a number";
+  SAMP_CHECK(std::isfinite(value) && errno != ERANGE)
+      << At(path, line_number) << field << " '" << token << "' is not a finite number";
+  return value;
+}
+
+int ParseInt(const std::string& token, const std::string& path, int line_number, const char* field) {
+  errno = 0;
+  char* end = nullptr;
+  const long value = std::strtol(token.c_str(), &end, 10);
+  SAMP_CHECK(end != token.c_str() && *end == '\0' && errno != ERANGE &&
+             value >= -2147483647L && value <= 2147483647L)
+      << At(path, line_number) << field << " '" << token << "' is not an integer";
+  return static_cast<int>(value);
+}
+
+// Occlusion is an integer in KITTI, but some writers print "-1.00" or "0.0".
+int ParseIntegral(const std::string& token, const std::string& path, int line_number,
+                  const char* field) {
+  const double value = ParseDouble(token, path, line_number, field);
+  SAMP_CHECK(value == std::floor(value) && std::abs(value) < 1e9)
+      << At(path, line_number) << field << " '" << token << "' is not an integer";
+  return static_cast<int>(value);
+}
+
+// Parses the 15/16 object columns starting at tokens[first].
+ObjectLabel ParseObject(const std::vector<std::string>& tokens, size_t first,
+                        const std::string& path, int line_number) {
+  ObjectLabel label;
+  const std::string& p = path;
+  const int n = line_number;
+  label.type = tokens[first];
+  SAMP_CHECK(!label.type.empty() && !std::isdigit(static_cast<unsigned char>(label.type[0])) &&
+             label.type[0] != '-' && label.type[0] != '.')
+      << At(p, n) << "object type '" << label.type << "' is not a name";
+  label.truncation = ParseDouble(tokens[first + 1], p, n, "truncation");
+  label.occlusion = ParseIntegral(tokens[first + 2], p, n, "occlusion");
+  label.alpha = ParseDouble(tokens[first + 3], p, n, "alpha");
+  for (int i = 0; i < 4; ++i) label.box_2d[i] = ParseDouble(tokens[first + 4 + i], p, n, "2D box");
+  label.height = ParseDouble(tokens[first + 8], p, n, "height");
+  label.width = ParseDouble(tokens[first + 9], p, n, "width");
+  label.length = ParseDouble(tokens[first + 10], p, n, "length");
+  for (int i = 0; i < 3; ++i) label.position[i] = ParseDouble(tokens[first + 11 + i], p, n, "location");
+  label.rotation_y = ParseDouble(tokens[first + 14], p, n, "rotation_y");
+  if (tokens.size() > first + 15) label.score = ParseDouble(tokens[first + 15], p, n, "score");
+
+  if (SameObjectType(label.type, "DontCare")) return label;  // -1/-1000 placeholders
+  SAMP_CHECK(label.box_2d[2] >= label.box_2d[0] && label.box_2d[3] >= label.box_2d[1])
+      << At(p, n) << "2D box (" << label.box_2d.transpose() << ") has x2 < x1 or y2 < y1";
+  SAMP_CHECK(label.height >= 0 && label.width >= 0 && label.length >= 0)
+      << At(p, n) << "negative object size h w l = " << label.height << " " << label.width << " "
+      << label.length;
+  SAMP_CHECK(label.position.z() > 0)
+      << At(p, n) << "object at z = " << label.position.z() << " m is behind the camera";
+  return label;
+}
+
+std::string FormatNumber(double value, int precision) {
+  std::ostringstream stream;
+  stream << std::fixed << std::setprecision(precision) << value;
+  std::string s = stream.str();
+  if (s.find('.') != std::string::npos) {  // "1.5000" -> "1.5", "-0.0000" -> "0"
+    while (!s.empty() && s.back() == '0') s.pop_back();
+    if (!s.empty() && s.back() == '.') s.pop_back();
+  }
+  if (s == "-0") s = "0";
+  return s;
+}
+
+void CheckLabelForWriting(const ObjectLabel& label) {
+  SAMP_CHECK(!label.type.empty() &&
+             std::none_of(label.type.begin(), label.type.end(),
+                          [](unsigned char c) { return std::isspace(c); }))
+      << "label type '" << label.type << "' is empty or contains whitespace";
+  const bool finite = std::isfinite(label.truncation) && std::isfinite(label.alpha) &&
+                      label.box_2d.allFinite() && std::isfinite(label.height) &&
+                      std::isfinite(label.width) && std::isfinite(label.length) &&
+                      label.position.allFinite() && std::isfinite(label.rotation_y) &&
+                      std::isfinite(label.score);
+  SAMP_CHECK(finite) << "label of type " << label.type << " (frame " << label.frame << ", track "
+                     << label.track_id << ") has a non-finite value";
+}
+
+std::string FormatObjectColumns(const ObjectLabel& label) {
+  CheckLabelForWriting(label);
+  std::ostringstream s;
+  s << label.type << ' ' << FormatNumber(label.truncation, 2) << ' ' << label.occlusion << ' '
+    << FormatNumber(label.alpha, 4);
+  for (int i = 0; i < 4; ++i) s << ' ' << FormatNumber(label.box_2d[i], 2);
+  s << ' ' << FormatNumber(label.height, 4) << ' ' << FormatNumber(label.width, 4) << ' '
+    << FormatNumber(label.length, 4);
+  for (int i = 0; i < 3; ++i) s << ' ' << FormatNumber(label.position[i], 4);
+  s << ' ' << FormatNumber(label.rotation_y, 4) << ' ' << FormatNumber(label.score, 4);
+  return s.str();
+}
+
+std::string FormatMatrixRow(const Eigen::Matrix<double, 3, 4>& m) {
+  std::ostringstream s;
+  s << std::setprecision(12);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) s << (r + c > 0 ? " " : "") << m(r, c);
+  return s.str();
+}
+
+}  // namespace
+
+bool SameObjectType(const std::string& a, const std::string& b) {
+  return a.size() == b.size() &&
+         std::equal(a.begin(), a.end(), b.begin(), [](unsigned char x, unsigned char y) {
+           return std::tolower(x) == std::tolower(y);
+         });
+}
+
+StereoCalibration ReadCalibration(const std::string& path, int image_width, int image_height) {
+  SAMP_CHECK(image_width > 0 && image_height > 0)
+      << "ReadCalibration: image size " << image_width << "x" << image_height << " must be positive";
+  const TextFile file = ReadTextFile(path, "calibration");
+  Eigen::Matrix<double, 3, 4> p[2];
+  int line_of[2] = {0, 0};
+  for (size_t i = 0; i < file.lines.size(); ++i) {
+    const int n = static_cast<int>(i) + 1;
+    const std::vector<std::string> tokens = Tokenize(file.lines[i]);
+    if (tokens.empty()) continue;
+    int which = -1;
+    if (tokens[0] == "P2:") which = 0;
+    if (tokens[0] == "P3:") which = 1;
+    if (which < 0) continue;
+    SAMP_CHECK(line_of[which] == 0) << At(path, n) << tokens[0] << " given twice (first on line "
+                                    << line_of[which] << ")";
+    SAMP_CHECK(tokens.size() == 13) << At(path, n) << tokens[0] << " has " << tokens.size() - 1
+                                    << " numbers, expected 12";
+    for (int k = 0; k < 12; ++k) p[which](k / 4, k % 4) = ParseDouble(tokens[k + 1], path, n, tokens[0].c_str());
+    line_of[which] = n;
+  }
+  SAMP_CHECK(line_of[0] > 0) << path << ": no 'P2:' line (left camera)";
+  SAMP_CHECK(line_of[1] > 0) << path << ": no 'P3:' line (right camera), needed for the baseline";
+  StereoCalibration calibration;
+  PinholeCamera& camera = calibration.camera;
+  camera.fx = p[0](0, 0);
+  camera.fy = p[0](1, 1);
+  camera.cx = p[0](0, 2);
+  camera.cy = p[0](1, 2);
+  camera.width = image_width;
+  camera.height = image_height;
+  SAMP_CHECK(camera.fx > 0 && camera.fy > 0)
+      << At(path, line_of[0]) << "P2 focal lengths " << camera.fx << ", " << camera.fy
+      << " must be positive";
+  SAMP_CHECK(std::abs(p[1](0, 0) - camera.fx) <= 1e-3 * camera.fx &&
+             std::abs(p[1](0, 2) - camera.cx) <= 1.0 && std::abs(p[1](1, 2) - camera.cy) <= 1.0)
+      << At(path, line_of[1]) << "P3 intrinsics differ from P2's: the pair is not rectified";
+  calibration.baseline = (p[0](0, 3) - p[1](0, 3)) / camera.fx;
+  SAMP_CHECK(calibration.baseline > 0)
+      << path << ": baseline (P2[0,3] - P3[0,3]) / fx = " << calibration.baseline
+      << " m is not positive (P3 must be the right camera)";
+  return calibration;
+}
+
+void WriteCalibration(const std::string& path, const StereoCalibration& calibration) {
+  const PinholeCamera& c = calibration.camera;
+  SAMP_CHECK(c.fx > 0 && c.fy > 0 && calibration.baseline > 0)
+      << "WriteCalibration " << path << ": focal lengths and baseline must be positive";
+  Eigen::Matrix<double, 3, 4> p2 = Eigen::Matrix<double, 3, 4>::Zero();
+  p2(0, 0) = c.fx;
+  p2(1, 1) = c.fy;
+  p2(0, 2) = c.cx;
+  p2(1, 2) = c.cy;
+  p2(2, 2) = 1.0;
+  Eigen::Matrix<double, 3, 4> p3 = p2;
+  p3(0, 3) = -c.fx * calibration.baseline;
+  WriteTextFileAtomically(path, "P2: " + FormatMatrixRow(p2) + "\nP3: " + FormatMatrixRow(p3) + "\n");
+}
+
+std::vector<ObjectLabel> ReadLabels(const std::string& path) {
+  const TextFile file = ReadTextFile(path, "label");
+  std::vector<ObjectLabel> labels;
+  for (size_t i = 0; i < file.lines.size(); ++i) {
+    const int n = static_cast<int>(i) + 1;
+    if (IsBlank(file.lines[i])) continue;
+    const std::vector<std::string> tokens = Tokenize(file.lines[i]);
+    SAMP_CHECK(tokens.size() == 15 || tokens.size() == 16)
+        << At(path, n) << tokens.size()
+        << " columns, expected 15 or 16 (type trunc occ alpha x1 y1 x2 y2 h w l x y z ry [score])";
+    labels.push_back(ParseObject(tokens, 0, path, n));
+  }
+  return labels;
+}
+
+std::vector<ObjectLabel> ReadTrackingLabels(const std::string& path) {
+  const TextFile file = ReadTextFile(path, "tracking label");
+  std::vector<ObjectLabel> labels;
+  for (size_t i = 0; i < file.lines.size(); ++i) {
+    const int n = static_cast<int>(i) + 1;
+    if (IsBlank(file.lines[i])) continue;
+    const std::vector<std::string> tokens = Tokenize(file.lines[i]);
+    SAMP_CHECK(tokens.size() == 17 || tokens.size() == 18)
+        << At(path, n) << tokens.size()
+        << " columns, expected 17 or 18 (frame track_id type trunc occ alpha x1 y1 x2 y2 h w l x y "
+           "z ry [score])";
+    const int frame = ParseInt(tokens[0], path, n, "frame");
+    const int track_id = ParseInt(tokens[1], path, n, "track_id");
+    SAMP_CHECK(frame >= 0) << At(path, n) << "frame " << frame << " is negative";
+    SAMP_CHECK(track_id >= -1) << At(path, n) << "track_id " << track_id << " is below -1";
+    ObjectLabel label = ParseObject(tokens, 2, path, n);
+    label.frame = frame;
+    label.track_id = track_id;
+    labels.push_back(label);
+  }
+  return labels;
+}
+
+std::string FormatLabel(const ObjectLabel& label) { return FormatObjectColumns(label); }
+
+std::string FormatTrackingLabel(const ObjectLabel& label) {
+  SAMP_CHECK(label.frame >= 0) << "tracking label of type " << label.type << " has frame "
+                               << label.frame;
+  return std::to_string(label.frame) + " " + std::to_string(label.track_id) + " " +
+         FormatObjectColumns(label);
+}
+
+void WriteLabels(const std::string& path, const std::vector<ObjectLabel>& labels) {
+  std::string text;
+  for (const ObjectLabel& label : labels) text += FormatLabel(label) + "\n";
+  WriteTextFileAtomically(path, text);
+}
+
+void WriteTrackingLabels(const std::string& path, const std::vector<ObjectLabel>& labels) {
+  std::string text;
+  for (const ObjectLabel& label : labels) text += FormatTrackingLabel(label) + "\n";
+  WriteTextFileAtomically(path, text);
+}
+
+Eigen::Vector4d ReadPlane(const std::string& path) {
+  const TextFile file = ReadTextFile(path, "plane");
+  std::vector<int> content;  // indices of non-blank lines
+  for (size_t i = 0; i < file.lines.size(); ++i)
+    if (!IsBlank(file.lines[i])) content.push_back(static_cast<int>(i));
+  SAMP_CHECK(content.size() == 4)
+      << path << ": " << content.size()
+      << " non-blank lines, expected 4 (\"# Matrix\", \"WIDTH 4\", \"HEIGHT 1\", \"a b c d\")";
+  const std::vector<std::string> header = Tokenize(file.lines[content[0]]);
+  SAMP_CHECK(header.size() == 2 && header[0] == "#" && header[1] == "Matrix")
+      << At(path, content[0] + 1) << "expected \"# Matrix\"";
+  const std::vector<std::string> width = Tokenize(file.lines[content[1]]);
+  SAMP_CHECK(width.size() == 2 && width[0] == "WIDTH" && width[1] == "4")
+      << At(path, content[1] + 1) << "expected \"WIDTH 4\"";
+  const std::vector<std::string> height = Tokenize(file.lines[content[2]]);
+  SAMP_CHECK(height.size() == 2 && height[0] == "HEIGHT" && height[1] == "1")
+      << At(path, content[2] + 1) << "expected \"HEIGHT 1\"";
+  const int n = content[3] + 1;
+  const std::vector<std::string> values = Tokenize(file.lines[content[3]]);
+  SAMP_CHECK(values.size() == 4) << At(path, n) << values.size() << " numbers, expected 4 (a b c d)";
+  Eigen::Vector4d plane;
+  for (int k = 0; k < 4; ++k) plane[k] = ParseDouble(values[k], path, n, "plane coefficient");
+  const double norm = plane.head<3>().norm();
+  SAMP_CHECK(norm > 1e-9) << At(path, n) << "plane normal has zero length";
+  plane /= norm;
+  if (plane[1] > 0) {
+    LogDebug() << path << ": plane normal points down, flipped";
+    plane = -plane;
+  }
+  SAMP_CHECK(plane[1] < -0.5) << At(path, n) << "plane normal (" << plane.head<3>().transpose()
+                              << ") is far from vertical: not a road plane";
+  return plane;
+}
+
+void WritePlane(const std::string& path, const Eigen::Vector4d& plane) {
+  SAMP_CHECK(plane.allFinite() && plane.head<3>().norm() > 1e-9)
+      << "WritePlane " << path << ": invalid plane " << plane.transpose();
+  std::ostringstream s;
+  s << std::scientific << std::setprecision(6) << "# Matrix\nWIDTH 4\nHEIGHT 1\n"
+    << plane[0] << ' ' << plane[1] << ' ' << plane[2] << ' ' << plane[3] << " \n";
+  WriteTextFileAtomically(path, s.str());
+}
+
+std::vector<Eigen::Isometry3d> ReadPoses(const std::string& path) {
+  const TextFile file = ReadTextFile(path, "poses");
+  std::vector<Eigen::Isometry3d> poses;
+  for (size_t i = 0; i < file.lines.size(); ++i) {
+    const int n = static_cast<int>(i) + 1;
+    if (IsBlank(file.lines[i])) {
+      // Only trailing blank lines are allowed: a blank line would shift frame numbers.
+      for (size_t j = i; j < file.lines.size(); ++j)
+        SAMP_CHECK(IsBlank(file.lines[j])) << At(path, n) << "blank line inside the poses (one line per frame)";
+      break;
+    }
+    const std::vector<std::string> tokens = Tokenize(file.lines[i]);
+    SAMP_CHECK(tokens.size() == 12) << At(path, n) << tokens.size()
+                                    << " numbers, expected 12 (3x4 row-major [R|t])";
+    Eigen::Matrix<double, 3, 4> m;
+    for (int k = 0; k < 12; ++k) m(k / 4, k % 4) = ParseDouble(tokens[k], path, n, "pose entry");
+    const Eigen::Matrix3d rotation = m.leftCols<3>();
+    const double orthogonality = (rotation.transpose() * rotation - Eigen::Matrix3d::Identity()).norm();
+    SAMP_CHECK(orthogonality < 1e-3 && rotation.determinant() > 0)
+        << At(path, n) << "the 3x3 part is not a rotation (|R^T R - I| = " << orthogonality
+        << ", det = " << rotation.determinant() << ")";
+    Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+    // Re-orthonormalise the rounding of 6-digit files.
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(rotation, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    pose.linear() = svd.matrixU() * svd.matrixV().transpose();
+    pose.translation() = m.col(3);
+    poses.push_back(pose);
+  }
+  SAMP_CHECK(!poses.empty()) << path << ": no poses";
+  return poses;
+}
+
+void WritePoses(const std::string& path, const std::vector<Eigen::Isometry3d>& world_from_camera) {
+  std::string text;
+  for (const Eigen::Isometry3d& pose : world_from_camera) {
+    SAMP_CHECK(pose.matrix().allFinite()) << "WritePoses " << path << ": non-finite pose";
+    text += FormatMatrixRow(pose.matrix().topRows<3>()) + "\n";
+  }
+  WriteTextFileAtomically(path, text);
+}
+
+cv::Mat ReadDisparity(const std::string& path, const cv::Size& expected_size) {
+  {
+    std::ifstream probe(path);
+    SAMP_CHECK(probe.good()) << "cannot open disparity file " << path;
+  }
+  const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
+  SAMP_CHECK(!raw.empty()) << path << ": not a readable image (disparity PNG expected)";
+  SAMP_CHECK(raw.type() == CV_16UC1)
+      << path << ": disparity PNG must be 1-channel 16-bit, got " << raw.channels() << " channel(s) of "
+      << (raw.depth() == CV_8U ? "8-bit" : raw.depth() == CV_16U ? "16-bit" : "other") << " data";
+  if (!expected_size.empty()) {
+    SAMP_CHECK(raw.size() == expected_size)
+        << path << ": disparity is " << raw.cols << "x" << raw.rows << ", expected "
+        << expected_size.width << "x" << expected_size.height << " (the image size)";
+  }
+  cv::Mat disparity;
+  raw.convertTo(disparity, CV_32F, 1.0 / 256.0);
+  return disparity;
+}
+
+void WriteDisparity(const std::string& path, const cv::Mat& disparity_px) {
+  SAMP_CHECK(disparity_px.type() == CV_32FC1 && !disparity_px.empty())
+      << "WriteDisparity " << path << ": expected a non-empty CV_32FC1 image";
+  cv::Mat raw(disparity_px.size(), CV_16UC1);
+  for (int r = 0; r < disparity_px.rows; ++r) {
+    const float* in = disparity_px.ptr<float>(r);
+    uint16_t* out = raw.ptr<uint16_t>(r);
+    for (int c = 0; c < disparity_px.cols; ++c) {
+      const float d = in[c];
+      if (!std::isfinite(d) || d <= 0) {
+        out[c] = 0;
+        continue;
+      }
+      const double value = std::round(static_cast<double>(d) * 256.0);
+      SAMP_CHECK(value < 65536.0) << "WriteDisparity " << path << ": disparity " << d
+                                  << " px at (" << c << ", " << r << ") is >= 256 px";
+      out[c] = static_cast<uint16_t>(std::max(1.0, value));  // a tiny positive value stays valid
+    }
+  }
+  WriteFileAtomically(path, [&](const std::string& temporary) {
+    // The temporary name may lack the extension OpenCV uses to pick the codec.
+    std::vector<uchar> buffer;
+    SAMP_CHECK(cv::imencode(".png", raw, buffer)) << "WriteDisparity " << path << ": PNG encoding failed";
+    std::ofstream stream(temporary, std::ios::binary);
+    stream.write(reinterpret_cast<const char*>(buffer.data()), static_cast<std::streamsize>(buffer.size()));
+    SAMP_CHECK(stream.good()) << "WriteDisparity: cannot write " << temporary;
+  });
+}
+
+}  // namespace samp

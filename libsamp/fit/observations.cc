@@ -1,0 +1,105 @@
+#include "libsamp/fit/observations.h"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "libsamp/core/error.h"
+#include "libsamp/fit/stereo.h"
+
+namespace samp {
+namespace {
+
+std::uint64_t SplitMix64(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+}  // namespace
+
+bool ObservationOptions::Check() const {
+  SAMP_CHECK(box_margin >= 0 && box_margin <= 2)
+      << "ObservationOptions.box_margin = " << box_margin << " must be in [0, 2]";
+  SAMP_CHECK(std::isfinite(min_height_above_road))
+      << "ObservationOptions.min_height_above_road must be finite";
+  SAMP_CHECK(max_distance_to_detection > 0)
+      << "ObservationOptions.max_distance_to_detection must be > 0";
+  SAMP_CHECK(min_disparity_px > 0) << "ObservationOptions.min_disparity_px must be > 0";
+  SAMP_CHECK(sigma_disparity_px > 0) << "ObservationOptions.sigma_disparity_px must be > 0";
+  SAMP_CHECK(max_points_per_frame >= 0) << "ObservationOptions.max_points_per_frame must be >= 0";
+  return true;
+}
+
+Eigen::Vector4d TransformPlane(const Eigen::Vector4d& plane_in_a, const Eigen::Isometry3d& b_from_a) {
+  const Eigen::Vector3d normal_in_b = b_from_a.linear() * plane_in_a.head<3>();
+  const double d_in_b = plane_in_a[3] - normal_in_b.dot(b_from_a.translation());
+  return Eigen::Vector4d(normal_in_b.x(), normal_in_b.y(), normal_in_b.z(), d_in_b);
+}
+
+Eigen::Vector3d DetectionCenter(const ObjectLabel& detection) {
+  return detection.position - Eigen::Vector3d(0, detection.height / 2, 0);
+}
+
+int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& calibration,
+                        const ObservationOptions& options, int track_id, TrackFrame* frame) {
+  options.Check();
+  SAMP_CHECK(frame != nullptr) << "ExtractObservations: frame is null";
+  SAMP_CHECK(disparity_px.type() == CV_32FC1) << "ExtractObservations: expected a CV_32FC1 disparity";
+  const ObjectLabel& detection = frame->detection;
+  const Eigen::Vector4d& box = detection.box_2d;
+  const double margin_u = options.box_margin * (box[2] - box[0]);
+  const double margin_v = options.box_margin * (box[3] - box[1]);
+  const int u0 = std::max(0, static_cast<int>(std::floor(box[0] - margin_u)));
+  const int v0 = std::max(0, static_cast<int>(std::floor(box[1] - margin_v)));
+  const int u1 = std::min(disparity_px.cols - 1, static_cast<int>(std::ceil(box[2] + margin_u)));
+  const int v1 = std::min(disparity_px.rows - 1, static_cast<int>(std::ceil(box[3] + margin_v)));
+
+  frame->candidate_points_in_world.clear();
+  frame->candidate_sigmas.clear();
+  frame->candidate_depths.clear();
+  if (u1 < u0 || v1 < v0) return 0;
+
+  const Eigen::Vector3d center_in_camera = DetectionCenter(detection);
+  const Eigen::Vector4d& plane = frame->ground_plane_in_world;
+  const double max_distance_sq = options.max_distance_to_detection * options.max_distance_to_detection;
+  const cv::Rect roi(u0, v0, u1 - u0 + 1, v1 - v0 + 1);
+  const std::vector<StereoPoint> stereo =
+      DisparityToPoints(disparity_px, calibration, options.min_disparity_px, 1, roi);
+
+  std::vector<Eigen::Vector3d> points_in_world;
+  std::vector<float> depths;
+  for (const StereoPoint& p : stereo) {
+    if ((p.point_in_camera - center_in_camera).squaredNorm() > max_distance_sq) continue;
+    const Eigen::Vector3d point_in_world = frame->world_from_camera * p.point_in_camera;
+    if (plane.head<3>().dot(point_in_world) + plane[3] <= options.min_height_above_road) continue;
+    points_in_world.push_back(point_in_world);
+    depths.push_back(static_cast<float>(p.point_in_camera.z()));
+  }
+  const int total = static_cast<int>(points_in_world.size());
+
+  std::vector<int> keep(total);
+  for (int i = 0; i < total; ++i) keep[i] = i;
+  if (options.max_points_per_frame > 0 && total > options.max_points_per_frame) {
+    std::mt19937_64 rng(SplitMix64(options.seed ^ SplitMix64(static_cast<std::uint64_t>(track_id) * 1000003ULL +
+                                                             static_cast<std::uint64_t>(frame->frame))));
+    for (int i = 0; i < options.max_points_per_frame; ++i) {
+      const int j = i + static_cast<int>(rng() % static_cast<std::uint64_t>(total - i));
+      std::swap(keep[i], keep[j]);
+    }
+    keep.resize(options.max_points_per_frame);
+    std::sort(keep.begin(), keep.end());
+  }
+  frame->candidate_points_in_world.reserve(keep.size());
+  frame->candidate_sigmas.reserve(keep.size());
+  frame->candidate_depths.reserve(keep.size());
+  for (int i : keep) {
+    frame->candidate_points_in_world.push_back(points_in_world[i]);
+    frame->candidate_depths.push_back(depths[i]);
+    frame->candidate_sigmas.push_back(DepthSigma(depths[i], options.sigma_disparity_px, calibration));
+  }
+  return total;
+}
+
+}  // namespace samp

@@ -1,0 +1,160 @@
+#include "libsamp/fit/road_plane.h"
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <random>
+#include <sstream>
+
+#include "libsamp/core/error.h"
+
+namespace samp {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Plane through the inliers' centroid with the normal of least variance,
+// oriented up (n.y < 0).
+Eigen::Vector4d FitPlaneLeastSquares(const std::vector<Eigen::Vector3d>& points,
+                                     const std::vector<int>& indices) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (int i : indices) centroid += points[i];
+  centroid /= static_cast<double>(indices.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (int i : indices) {
+    const Eigen::Vector3d q = points[i] - centroid;
+    scatter += q * q.transpose();
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(scatter);
+  Eigen::Vector3d normal = solver.eigenvectors().col(0);  // smallest eigenvalue first
+  if (normal.y() > 0) normal = -normal;
+  return Eigen::Vector4d(normal.x(), normal.y(), normal.z(), -normal.dot(centroid));
+}
+
+}  // namespace
+
+bool RoadPlaneOptions::Check() const {
+  SAMP_CHECK(iterations > 0) << "RoadPlaneOptions.iterations = " << iterations << " must be > 0";
+  SAMP_CHECK(inlier_threshold > 0) << "RoadPlaneOptions.inlier_threshold must be > 0";
+  SAMP_CHECK(max_depth > 0) << "RoadPlaneOptions.max_depth must be > 0";
+  SAMP_CHECK(max_tilt_deg > 0 && max_tilt_deg < 90) << "RoadPlaneOptions.max_tilt_deg must be in (0, 90)";
+  SAMP_CHECK(min_camera_height < max_camera_height)
+      << "RoadPlaneOptions.min_camera_height must be below max_camera_height";
+  SAMP_CHECK(max_points >= 3) << "RoadPlaneOptions.max_points must be >= 3";
+  SAMP_CHECK(min_inliers >= 3) << "RoadPlaneOptions.min_inliers must be >= 3";
+  return true;
+}
+
+std::string RoadPlaneSummary::BriefReport() const {
+  std::ostringstream s;
+  if (success) {
+    s << "road plane: " << num_inliers << " of " << num_points << " points inliers, rms "
+      << rms_inlier_distance << " m";
+  } else {
+    s << "road plane estimation failed: " << message;
+  }
+  return s.str();
+}
+
+Eigen::Vector4d EstimateRoadPlane(const std::vector<StereoPoint>& stereo_points,
+                                  const RoadPlaneOptions& options, RoadPlaneSummary* summary) {
+  options.Check();
+  RoadPlaneSummary local;
+  RoadPlaneSummary& result = summary != nullptr ? *summary : local;
+  result = RoadPlaneSummary();
+  const Eigen::Vector4d kDefault(0, -1, 0, 1.65);
+
+  std::vector<Eigen::Vector3d> points;
+  for (const StereoPoint& p : stereo_points) {
+    const Eigen::Vector3d& x = p.point_in_camera;
+    if (x.allFinite() && x.y() > options.min_point_height_below_camera && x.z() > 0 &&
+        x.z() < options.max_depth)
+      points.push_back(x);
+  }
+  std::mt19937_64 rng(options.seed);
+  if (static_cast<int>(points.size()) > options.max_points) {
+    // Partial Fisher-Yates with a portable index draw.
+    for (int i = 0; i < options.max_points; ++i) {
+      const size_t j = i + rng() % (points.size() - i);
+      std::swap(points[i], points[j]);
+    }
+    points.resize(options.max_points);
+  }
+  const int n = static_cast<int>(points.size());
+  result.num_points = n;
+  if (n < options.min_inliers || n < 3) {
+    std::ostringstream s;
+    s << "only " << n << " stereo points below the camera within " << options.max_depth << " m";
+    result.message = s.str();
+    return kDefault;
+  }
+
+  const double cos_max_tilt = std::cos(options.max_tilt_deg * kPi / 180.0);
+  auto plausible = [&](const Eigen::Vector4d& plane) {
+    return -plane.y() >= cos_max_tilt && plane[3] >= options.min_camera_height &&
+           plane[3] <= options.max_camera_height;
+  };
+  auto count_inliers = [&](const Eigen::Vector4d& plane, std::vector<int>* inliers) {
+    int count = 0;
+    for (int i = 0; i < n; ++i) {
+      if (std::abs(plane.head<3>().dot(points[i]) + plane[3]) < options.inlier_threshold) {
+        ++count;
+        if (inliers != nullptr) inliers->push_back(i);
+      }
+    }
+    return count;
+  };
+
+  Eigen::Vector4d best = kDefault;
+  int best_count = -1;
+  for (int it = 0; it < options.iterations; ++it) {
+    const int a = static_cast<int>(rng() % n), b = static_cast<int>(rng() % n),
+              c = static_cast<int>(rng() % n);
+    Eigen::Vector3d normal = (points[b] - points[a]).cross(points[c] - points[a]);
+    const double norm = normal.norm();
+    if (norm < 1e-9) continue;  // degenerate sample
+    normal /= norm;
+    if (normal.y() > 0) normal = -normal;
+    const Eigen::Vector4d plane(normal.x(), normal.y(), normal.z(), -normal.dot(points[a]));
+    if (!plausible(plane)) continue;
+    const int count = count_inliers(plane, nullptr);
+    if (count > best_count) {
+      best_count = count;
+      best = plane;
+    }
+  }
+  if (best_count < options.min_inliers) {
+    std::ostringstream s;
+    s << "best of " << options.iterations << " plausible hypotheses has "
+      << std::max(best_count, 0) << " inliers (< " << options.min_inliers << ")";
+    result.message = s.str();
+    return kDefault;
+  }
+  // Two rounds of least squares on the inliers.
+  Eigen::Vector4d plane = best;
+  std::vector<int> inliers;
+  for (int round = 0; round < 2; ++round) {
+    inliers.clear();
+    count_inliers(plane, &inliers);
+    if (static_cast<int>(inliers.size()) < options.min_inliers) break;
+    const Eigen::Vector4d refined = FitPlaneLeastSquares(points, inliers);
+    if (!plausible(refined)) break;
+    plane = refined;
+  }
+  inliers.clear();
+  count_inliers(plane, &inliers);
+  if (static_cast<int>(inliers.size()) < options.min_inliers) {
+    result.message = "the refined plane lost its inliers";
+    return kDefault;
+  }
+  double sum_sq = 0;
+  for (int i : inliers) {
+    const double r = plane.head<3>().dot(points[i]) + plane[3];
+    sum_sq += r * r;
+  }
+  result.success = true;
+  result.num_inliers = static_cast<int>(inliers.size());
+  result.rms_inlier_distance = std::sqrt(sum_sq / inliers.size());
+  return plane;
+}
+
+}  // namespace samp

@@ -1,0 +1,368 @@
+#include "libsamp/fit/sequence.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "libsamp/core/error.h"
+#include "libsamp/core/log.h"
+#include "libsamp/fit/kitti_io.h"
+
+namespace samp {
+namespace fs = std::filesystem;
+namespace {
+
+std::string FrameTag(const std::string& name, int frame) {
+  std::ostringstream s;
+  s << name << '_' << (frame < 10 ? "0" : "") << frame;
+  return s.str();
+}
+
+// Frame numbers of the files "<name>_<ff><extension>" in `folder`, mapped to their paths.
+std::map<int, std::string> ListFrameFiles(const fs::path& folder, const std::string& name,
+                                          const std::string& extension) {
+  std::map<int, std::string> files;
+  std::error_code error;
+  if (!fs::is_directory(folder, error)) return files;
+  const std::regex pattern("^" + name + "_([0-9]+)\\" + extension + "$");
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
+    if (!entry.is_regular_file()) continue;
+    const std::string file_name = entry.path().filename().string();
+    std::smatch match;
+    if (!std::regex_match(file_name, match, pattern)) continue;
+    const std::string digits = match[1].str();
+    SAMP_CHECK(digits.size() <= 6) << entry.path().string() << ": frame number '" << digits
+                                   << "' too long";
+    const int frame = std::stoi(digits);
+    SAMP_CHECK(files.count(frame) == 0)
+        << folder.string() << ": two files for frame " << frame << " ("
+        << files[frame] << ", " << entry.path().string() << ")";
+    files[frame] = entry.path().string();
+  }
+  return files;
+}
+
+bool TypeKept(const std::string& type, const SequenceOptions& options) {
+  return std::any_of(options.object_types.begin(), options.object_types.end(),
+                     [&](const std::string& kept) { return SameObjectType(type, kept); });
+}
+
+bool FrameInRange(int frame, const SequenceOptions& options) {
+  return (options.first_frame < 0 || frame >= options.first_frame) &&
+         (options.last_frame < 0 || frame <= options.last_frame);
+}
+
+}  // namespace
+
+bool SequenceOptions::Check() const {
+  stereo.Check();
+  road_plane.Check();
+  observations.Check();
+  tracker.Check();
+  SAMP_CHECK(!object_types.empty()) << "SequenceOptions.object_types must not be empty";
+  SAMP_CHECK(last_frame < 0 || first_frame < 0 || first_frame <= last_frame)
+      << "SequenceOptions.first_frame = " << first_frame << " is after last_frame = " << last_frame;
+  return true;
+}
+
+SequenceFiles ListSequence(const std::string& directory) {
+  const fs::path root(directory);
+  std::error_code error;
+  SAMP_CHECK(fs::is_directory(root, error)) << "sequence directory " << directory << " does not exist";
+  const fs::path calib_dir = root / "calib";
+  SAMP_CHECK(fs::is_directory(calib_dir, error))
+      << "sequence " << directory << " has no calib/ folder (calib/<seq>.txt with P2 and P3)";
+  std::vector<fs::path> calib_files;
+  for (const fs::directory_entry& entry : fs::directory_iterator(calib_dir))
+    if (entry.is_regular_file() && entry.path().extension() == ".txt") calib_files.push_back(entry.path());
+  std::sort(calib_files.begin(), calib_files.end());
+  SAMP_CHECK(!calib_files.empty()) << calib_dir.string() << ": no <seq>.txt calibration file";
+  fs::path calib = calib_files.front();
+  if (calib_files.size() > 1) {
+    const std::string wanted = fs::absolute(root).lexically_normal().filename().string();
+    const auto match = std::find_if(calib_files.begin(), calib_files.end(), [&](const fs::path& p) {
+      return p.stem().string() == wanted;
+    });
+    SAMP_CHECK(match != calib_files.end())
+        << calib_dir.string() << ": " << calib_files.size()
+        << " calibration files and none named after the directory: which sequence is it?";
+    calib = *match;
+  }
+  SequenceFiles files;
+  files.directory = directory;
+  files.name = calib.stem().string();
+  files.calibration = calib.string();
+  const fs::path poses = root / "poses" / (files.name + ".txt");
+  if (fs::exists(poses, error)) files.poses = poses.string();
+
+  const auto left = ListFrameFiles(root / "image_2", files.name, ".png");
+  const auto right = ListFrameFiles(root / "image_3", files.name, ".png");
+  const auto disparity = ListFrameFiles(root / "disparity", files.name, ".png");
+  const auto detections = ListFrameFiles(root / "detections", files.name, ".txt");
+  const auto planes = ListFrameFiles(root / "planes", files.name, ".txt");
+  std::set<int> numbers;
+  for (const auto* m : {&left, &disparity, &detections})
+    for (const auto& [frame, path] : *m) numbers.insert(frame);
+  SAMP_CHECK(!numbers.empty()) << "sequence " << directory << ": no frames (no " << files.name
+                               << "_<ff> files in image_2/, disparity/ or detections/)";
+  auto get = [](const std::map<int, std::string>& m, int frame) {
+    const auto it = m.find(frame);
+    return it == m.end() ? std::string() : it->second;
+  };
+  for (int frame : numbers) {
+    FrameFiles f;
+    f.frame = frame;
+    f.image_left = get(left, frame);
+    f.image_right = get(right, frame);
+    f.disparity = get(disparity, frame);
+    f.detections = get(detections, frame);
+    f.plane = get(planes, frame);
+    files.frames.push_back(f);
+  }
+  return files;
+}
+
+SequenceReader::SequenceReader(const std::string& directory, const SequenceOptions& options)
+    : options_(options) {
+  options_.Check();
+  files_ = ListSequence(directory);
+  // The image size: from the first left image, else the first disparity map.
+  int width = 1242, height = 375;
+  bool size_known = false;
+  for (const FrameFiles& f : files_.frames) {
+    const std::string& probe = !f.image_left.empty() ? f.image_left : f.disparity;
+    if (probe.empty()) continue;
+    const cv::Mat image = cv::imread(probe, cv::IMREAD_UNCHANGED);
+    SAMP_CHECK(!image.empty()) << probe << ": not a readable PNG image";
+    width = image.cols;
+    height = image.rows;
+    size_known = true;
+    break;
+  }
+  if (!size_known)
+    LogInfo() << files_.name << ": no image or disparity to take the image size from, using "
+              << width << "x" << height;
+  calibration_ = ReadCalibration(files_.calibration, width, height);
+  if (!files_.poses.empty()) {
+    poses_ = ReadPoses(files_.poses);
+    const int last = files_.frames.back().frame;
+    SAMP_CHECK(static_cast<int>(poses_.size()) > last)
+        << files_.poses << ": " << poses_.size() << " poses (frames 0.." << poses_.size() - 1
+        << "), but the sequence has frame " << last;
+  } else {
+    LogInfo() << files_.name << ": no poses/" << files_.name
+              << ".txt, assuming a static camera (identity ego poses)";
+  }
+}
+
+Eigen::Isometry3d SequenceReader::WorldFromCamera(int frame) const {
+  if (poses_.empty()) return Eigen::Isometry3d::Identity();
+  SAMP_CHECK(frame >= 0 && frame < static_cast<int>(poses_.size()))
+      << files_.poses << ": no pose for frame " << frame;
+  return poses_[frame];
+}
+
+std::vector<ObjectLabel> SequenceReader::ReadDetections(int index) const {
+  SAMP_CHECK(index >= 0 && index < num_frames()) << "SequenceReader: frame index " << index << " out of range";
+  const FrameFiles& f = files_.frames[index];
+  SAMP_CHECK(!f.detections.empty())
+      << "sequence " << files_.directory << ": missing detections/" << FrameTag(files_.name, f.frame)
+      << ".txt (an empty file means no detections)";
+  std::vector<ObjectLabel> kept;
+  for (ObjectLabel& label : ReadLabels(f.detections)) {
+    if (!TypeKept(label.type, options_) || label.score < options_.min_detection_score) continue;
+    label.frame = f.frame;
+    kept.push_back(label);
+  }
+  return kept;
+}
+
+SequenceFrame SequenceReader::ReadFrame(int index, bool with_detections) const {
+  SAMP_CHECK(index >= 0 && index < num_frames()) << "SequenceReader: frame index " << index << " out of range";
+  const FrameFiles& f = files_.frames[index];
+  const std::string tag = FrameTag(files_.name, f.frame);
+  const cv::Size size(calibration_.camera.width, calibration_.camera.height);
+  SequenceFrame frame;
+  frame.frame = f.frame;
+  frame.world_from_camera = WorldFromCamera(f.frame);
+  if (with_detections) frame.detections = ReadDetections(index);
+
+  if (!f.disparity.empty()) {
+    frame.disparity_px = ReadDisparity(f.disparity, size);
+  } else {
+    SAMP_CHECK(!f.image_left.empty() && !f.image_right.empty())
+        << "sequence " << files_.directory << ": frame " << tag << " has no disparity/" << tag
+        << ".png and no image_2/image_3 pair to compute it from";
+    const cv::Mat left = cv::imread(f.image_left, cv::IMREAD_GRAYSCALE);
+    const cv::Mat right = cv::imread(f.image_right, cv::IMREAD_GRAYSCALE);
+    SAMP_CHECK(!left.empty()) << f.image_left << ": not a readable image";
+    SAMP_CHECK(!right.empty()) << f.image_right << ": not a readable image";
+    SAMP_CHECK(left.size() == size && right.size() == size)
+        << "frame " << tag << ": image_2 is " << left.cols << "x" << left.rows << ", image_3 is "
+        << right.cols << "x" << right.rows << ", expected " << size.width << "x" << size.height;
+    frame.disparity_px = ComputeDisparity(left, right, options_.stereo);
+    frame.disparity_computed = true;
+    frame.notes.push_back(tag + ": no disparity file, computed with StereoSGBM");
+  }
+
+  if (!f.plane.empty()) {
+    frame.plane_in_camera = ReadPlane(f.plane);
+  } else {
+    RoadPlaneOptions plane_options = options_.road_plane;
+    plane_options.seed = options_.road_plane.seed + static_cast<std::uint64_t>(f.frame);
+    RoadPlaneSummary plane_summary;
+    const std::vector<StereoPoint> points =
+        DisparityToPoints(frame.disparity_px, calibration_, 1.0, /*stride=*/2,
+                          cv::Rect(0, size.height / 3, size.width, size.height - size.height / 3));
+    frame.plane_in_camera = EstimateRoadPlane(points, plane_options, &plane_summary);
+    frame.plane_estimated = true;
+    std::ostringstream note;
+    if (plane_summary.success) {
+      note << tag << ": no plane file, estimated the road plane by RANSAC (" << plane_summary.BriefReport()
+           << "; camera height " << frame.plane_in_camera[3] << " m)";
+    } else {
+      frame.plane_estimation_failed = true;
+      note << tag << ": no plane file and " << plane_summary.BriefReport()
+           << "; using the default plane 1.65 m below the camera";
+    }
+    frame.notes.push_back(note.str());
+  }
+  for (const std::string& note : frame.notes) {
+    if (frame.plane_estimation_failed && note.find("failed") != std::string::npos) {
+      LogWarning() << note;
+    } else {
+      LogInfo() << note;
+    }
+  }
+  return frame;
+}
+
+std::string SequenceSummary::BriefReport() const {
+  std::ostringstream s;
+  s << "sequence " << name << ": " << num_frames << " frames, " << num_tracks << " tracks, "
+    << num_track_frames << " track frames (" << num_track_frames_without_points
+    << " without points), " << num_candidate_points << " candidate points; poses "
+    << (poses_from_file ? "from file" : "static camera") << "; tracks "
+    << (tracks_from_labels ? "from labels" : "linked") << " (" << tracking.BriefReport() << ")";
+  if (frames_with_computed_disparity > 0) s << "; SGBM disparity in " << frames_with_computed_disparity << " frames";
+  if (frames_with_estimated_plane > 0)
+    s << "; RANSAC plane in " << frames_with_estimated_plane << " frames ("
+      << frames_plane_estimation_failed << " failed, default used)";
+  return s.str();
+}
+
+std::vector<Track> LoadSequenceTracks(const std::string& directory, const SequenceOptions& options,
+                                      SequenceSummary* summary) {
+  options.Check();
+  const SequenceReader reader(directory, options);
+  const SequenceFiles& files = reader.files();
+  SequenceSummary local;
+  SequenceSummary& result = summary != nullptr ? *summary : local;
+  result = SequenceSummary();
+  result.name = files.name;
+  result.poses_from_file = reader.has_poses();
+  if (!reader.has_poses()) result.messages.push_back(files.name + ": no poses file, static camera assumed");
+
+  std::vector<int> indices;  // frame indices within the range
+  std::map<int, int> index_of_frame;
+  for (int i = 0; i < reader.num_frames(); ++i) {
+    if (!FrameInRange(files.frames[i].frame, options)) continue;
+    indices.push_back(i);
+    index_of_frame[files.frames[i].frame] = i;
+  }
+  SAMP_CHECK(!indices.empty()) << "sequence " << directory << ": no frames in the range ["
+                               << options.first_frame << ", " << options.last_frame << "]";
+  result.num_frames = static_cast<int>(indices.size());
+
+  std::vector<LinkedTrack> linked;
+  if (options.tracking_labels_path.empty()) {
+    std::vector<FrameDetections> detections;
+    for (int i : indices) {
+      FrameDetections fd;
+      fd.frame = files.frames[i].frame;
+      fd.world_from_camera = reader.WorldFromCamera(fd.frame);
+      fd.detections = reader.ReadDetections(i);
+      detections.push_back(std::move(fd));
+    }
+    linked = LinkDetections(detections, options.tracker, &result.tracking);
+  } else {
+    std::vector<ObjectLabel> labels;
+    for (const ObjectLabel& label : ReadTrackingLabels(options.tracking_labels_path)) {
+      if (!TypeKept(label.type, options) || label.score < options.min_detection_score) continue;
+      if (!FrameInRange(label.frame, options)) continue;
+      SAMP_CHECK(index_of_frame.count(label.frame) > 0)
+          << options.tracking_labels_path << ": track " << label.track_id << " has a label in frame "
+          << label.frame << ", which sequence " << directory << " does not have";
+      labels.push_back(label);
+    }
+    linked = TracksFromLabels(labels, options.tracker.min_track_length, &result.tracking);
+    result.tracks_from_labels = true;
+  }
+  if (result.tracking.num_short_tracks > 0)
+    LogInfo() << files.name << ": " << result.tracking.BriefReport();
+
+  // Which (track, detection) pairs each frame serves.
+  std::map<int, std::vector<std::pair<int, int>>> members_of_frame;  // frame -> (track, k)
+  for (int t = 0; t < static_cast<int>(linked.size()); ++t)
+    for (int k = 0; k < static_cast<int>(linked[t].detections.size()); ++k)
+      members_of_frame[linked[t].detections[k].frame].push_back({t, k});
+  std::vector<int> work_frames;
+  for (const auto& [frame, members] : members_of_frame) work_frames.push_back(frame);
+
+  std::vector<Track> tracks(linked.size());
+  for (size_t t = 0; t < linked.size(); ++t) {
+    tracks[t].id = linked[t].id;
+    tracks[t].sequence = files.name;
+    tracks[t].type = linked[t].detections.front().type;
+    tracks[t].calibration = reader.calibration();
+    tracks[t].frames.resize(linked[t].detections.size());
+  }
+  std::vector<SequenceFrame> read(work_frames.size());
+  std::vector<int> totals(work_frames.size(), 0);
+  // Frames are independent: read and extract in parallel; each task writes
+  // only its own TrackFrame slots.
+  tbb::parallel_for(size_t(0), work_frames.size(), [&](size_t w) {
+    const int frame_number = work_frames[w];
+    SequenceFrame frame = reader.ReadFrame(index_of_frame.at(frame_number), /*with_detections=*/false);
+    const Eigen::Vector4d plane_in_world = TransformPlane(frame.plane_in_camera, frame.world_from_camera);
+    for (const auto& [t, k] : members_of_frame.at(frame_number)) {
+      TrackFrame& tf = tracks[t].frames[k];
+      tf.frame = frame_number;
+      tf.time = frame_number / options.tracker.frame_rate_hz;
+      tf.detection = linked[t].detections[k];
+      tf.world_from_camera = frame.world_from_camera;
+      tf.ground_plane_in_world = plane_in_world;
+      totals[w] += ExtractObservations(frame.disparity_px, reader.calibration(), options.observations,
+                                       linked[t].id, &tf);
+    }
+    frame.disparity_px.release();
+    read[w] = std::move(frame);
+  });
+
+  for (const SequenceFrame& frame : read) {
+    result.frames_with_estimated_plane += frame.plane_estimated ? 1 : 0;
+    result.frames_with_computed_disparity += frame.disparity_computed ? 1 : 0;
+    result.frames_plane_estimation_failed += frame.plane_estimation_failed ? 1 : 0;
+    result.messages.insert(result.messages.end(), frame.notes.begin(), frame.notes.end());
+  }
+  for (const Track& track : tracks)
+    for (const TrackFrame& tf : track.frames) {
+      ++result.num_track_frames;
+      result.num_candidate_points += static_cast<long long>(tf.candidate_points_in_world.size());
+      if (tf.candidate_points_in_world.empty()) {
+        ++result.num_track_frames_without_points;
+        result.messages.push_back(files.name + ": track " + std::to_string(track.id) + " has no stereo points in frame " +
+                                  std::to_string(tf.frame));
+      }
+    }
+  result.num_tracks = static_cast<int>(tracks.size());
+  return tracks;
+}
+
+}  // namespace samp
