@@ -1,0 +1,124 @@
+#include "libsamp/scan/embree_scene.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "libsamp/core/error.h"
+
+namespace samp {
+namespace {
+
+const Mesh kUnitBox = MakeBoxMesh(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1));
+
+TEST(EmbreeScene, HitsABoxAtTheRightDistanceAndMisses) {
+  const EmbreeScene scene(kUnitBox);
+  EXPECT_TRUE(scene.PacketSize() == 4 || scene.PacketSize() == 8 || scene.PacketSize() == 16);
+  std::vector<Eigen::Vector3f> origins = {
+      {0, 0, -5},      // through the shared diagonal edge of the -z face (robust traversal)
+      {0.3f, 0.2f, 5},  // from +z, towards -z
+      {0, 0, -5},      // along x: misses
+      {-4, 0.5f, 0.5f},  // from -x
+      {0, 0, -5},      // would hit at 4, but t_far is 3.5 for all rays
+  };
+  std::vector<Eigen::Vector3f> directions = {
+      {0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {1, 0, 0}, {0, 0, 1},
+  };
+  std::vector<RayHit> hits;
+  scene.Intersect(origins, directions, &hits);
+  ASSERT_EQ(hits.size(), 5u);
+  ASSERT_TRUE(hits[0].Hit());
+  EXPECT_NEAR(hits[0].t, 4.f, 1e-5);
+  EXPECT_EQ(hits[0].geometry, 0);
+  EXPECT_TRUE(hits[0].normal.isApprox(Eigen::Vector3f(0, 0, -1), 1e-5)) << hits[0].normal.transpose();
+  ASSERT_TRUE(hits[1].Hit());
+  EXPECT_NEAR(hits[1].t, 4.f, 1e-5);
+  EXPECT_TRUE(hits[1].normal.isApprox(Eigen::Vector3f(0, 0, 1), 1e-5));
+  EXPECT_FALSE(hits[2].Hit());
+  EXPECT_TRUE(std::isinf(hits[2].t));
+  EXPECT_EQ(hits[2].triangle, -1);
+  ASSERT_TRUE(hits[3].Hit());
+  EXPECT_NEAR(hits[3].t, 3.f, 1e-5);
+  EXPECT_TRUE(hits[3].normal.isApprox(Eigen::Vector3f(-1, 0, 0), 1e-5));
+  // The -x face is triangles 0 and 1 of MakeBoxMesh.
+  EXPECT_TRUE(hits[3].triangle == 0 || hits[3].triangle == 1) << hits[3].triangle;
+
+  scene.Intersect(origins, directions, &hits, 3.5f);
+  EXPECT_FALSE(hits[0].Hit());
+  EXPECT_FALSE(hits[1].Hit());
+  EXPECT_TRUE(hits[3].Hit());
+
+  // Normals face the ray origin also from inside.
+  scene.Intersect({Eigen::Vector3f(0, 0, 0)}, {Eigen::Vector3f(0, 1, 0)}, &hits);
+  ASSERT_TRUE(hits[0].Hit());
+  EXPECT_NEAR(hits[0].t, 1.f, 1e-6);
+  EXPECT_TRUE(hits[0].normal.isApprox(Eigen::Vector3f(0, -1, 0), 1e-5));
+
+  EXPECT_THROW(scene.Intersect({Eigen::Vector3f::Zero()}, {}, &hits), Error);
+}
+
+TEST(EmbreeScene, GeometryIdsAreMeshIndicesAndNearestWins) {
+  const Mesh far_box = MakeBoxMesh(Eigen::Vector3d(-1, -1, 9), Eigen::Vector3d(1, 1, 11));
+  const Mesh near_box = MakeBoxMesh(Eigen::Vector3d(-0.5, -0.5, 4), Eigen::Vector3d(0.5, 0.5, 5));
+  const Mesh empty;
+  const EmbreeScene scene(std::vector<const Mesh*>{&far_box, &empty, &near_box});
+  std::vector<RayHit> hits;
+  scene.Intersect({Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(0.8f, 0, 0)},
+                  {Eigen::Vector3f(0, 0, 1), Eigen::Vector3f(0, 0, 1)}, &hits);
+  EXPECT_EQ(hits[0].geometry, 2);
+  EXPECT_NEAR(hits[0].t, 4.f, 1e-5);
+  EXPECT_EQ(hits[1].geometry, 0);
+  EXPECT_NEAR(hits[1].t, 9.f, 1e-5);
+}
+
+TEST(EmbreeScene, RejectsBadIndices) {
+  Mesh mesh = kUnitBox;
+  mesh.triangles.push_back(Eigen::Vector3i(0, 1, 8));
+  EXPECT_THROW(EmbreeScene{mesh}, Error);
+}
+
+TEST(EmbreeScene, OriginAndCameraPathsAgreeWithGeneralRays) {
+  const Mesh sphere = MakeSphereMesh(Eigen::Vector3d(0.2, -0.1, 0.3), 1.0, 24, 48);
+  const EmbreeScene scene(sphere);
+  PinholeCamera camera;
+  camera.width = 37;  // not a multiple of any tile size
+  camera.height = 23;
+  camera.fx = camera.fy = 30;
+  camera.cx = 18;
+  camera.cy = 11;
+  Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
+  world_from_camera.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  world_from_camera.translation() = world_from_camera.linear() * Eigen::Vector3d(0, 0, -4);
+  std::vector<Eigen::Vector3f> origins, directions;
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      origins.push_back(world_from_camera.translation().cast<float>());
+      directions.push_back((world_from_camera.linear() * camera.Ray(u, v).normalized()).cast<float>());
+    }
+  }
+  std::vector<RayHit> general, from_origin;
+  scene.Intersect(origins, directions, &general);
+  scene.IntersectFromOrigin(origins[0], directions, &from_origin);
+  // Camera path over two row bands.
+  std::vector<RayHit> top(size_t(10) * camera.width), bottom(size_t(13) * camera.width);
+  scene.IntersectCamera(camera, world_from_camera, 0, 10, top.data());
+  scene.IntersectCamera(camera, world_from_camera, 10, 23, bottom.data());
+  std::vector<RayHit> tiled = top;
+  tiled.insert(tiled.end(), bottom.begin(), bottom.end());
+  int num_hits = 0;
+  for (size_t i = 0; i < general.size(); ++i) {
+    num_hits += general[i].Hit();
+    for (const std::vector<RayHit>* other : {&from_origin, &tiled}) {
+      ASSERT_EQ((*other)[i].Hit(), general[i].Hit()) << i;
+      if (!general[i].Hit()) continue;
+      EXPECT_NEAR((*other)[i].t, general[i].t, 1e-4);
+      EXPECT_EQ((*other)[i].triangle, general[i].triangle);
+    }
+  }
+  EXPECT_GT(num_hits, 100);
+  EXPECT_LT(num_hits, int(general.size()));
+  EXPECT_THROW(scene.IntersectCamera(camera, world_from_camera, 0, 24, tiled.data()), Error);
+}
+
+}  // namespace
+}  // namespace samp

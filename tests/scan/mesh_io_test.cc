@@ -1,0 +1,135 @@
+#include "libsamp/scan/mesh_io.h"
+
+#include <gtest/gtest.h>
+
+#include "libsamp/core/error.h"
+#include "test_util.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The unit cube as quads in OBJ (triangulated on load), with a line and a point
+// element that must be dropped.
+constexpr const char* kCubeObj = R"(# unit cube
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+f 1 4 3 2
+f 5 6 7 8
+f 1 2 6 5
+f 4 8 7 3
+f 1 5 8 4
+f 2 3 7 6
+l 1 7
+p 3
+)";
+
+TEST(MeshIo, LoadsObjTriangulatedWithoutLinesAndPoints) {
+  const fs::path dir = test::TempDir("obj");
+  test::WriteText(dir / "cube.obj", kCubeObj);
+  const Mesh mesh = LoadMesh((dir / "cube.obj").string());
+  EXPECT_EQ(mesh.triangles.size(), 12u);
+  const AlignedBox box = mesh.Bounds();
+  EXPECT_TRUE(box.min.isApprox(Eigen::Vector3d(0, 0, 0)));
+  EXPECT_TRUE(box.max.isApprox(Eigen::Vector3d(1, 1, 1)));
+  fs::remove_all(dir);
+}
+
+TEST(MeshIo, LoadsOff) {
+  const fs::path dir = test::TempDir("off");
+  test::WriteText(dir / "tet.off",
+                  "OFF\n4 4 0\n0 0 0\n2 0 0\n0 3 0\n0 0 4\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  const Mesh mesh = LoadMesh((dir / "tet.off").string());
+  EXPECT_EQ(mesh.triangles.size(), 4u);
+  EXPECT_TRUE(mesh.Bounds().Size().isApprox(Eigen::Vector3d(2, 3, 4)));
+  fs::remove_all(dir);
+}
+
+TEST(MeshIo, AppliesNodeTransforms) {
+  // An AC3D file whose object is translated by its 'loc' (a node transform).
+  const fs::path dir = test::TempDir("ac");
+  test::WriteText(dir / "tri.ac",
+                  "AC3Db\n"
+                  "MATERIAL \"m\" rgb 1 1 1  amb 0.2 0.2 0.2  emis 0 0 0  spec 0 0 0  shi 0  trans 0\n"
+                  "OBJECT world\nkids 1\n"
+                  "OBJECT poly\nname \"t\"\nloc 10 20 30\nnumvert 3\n0 0 0\n1 0 0\n0 1 0\n"
+                  "numsurf 1\nSURF 0x10\nmat 0\nrefs 3\n0 0 0\n1 0 0\n2 0 0\nkids 0\n");
+  const Mesh mesh = LoadMesh((dir / "tri.ac").string());
+  ASSERT_EQ(mesh.triangles.size(), 1u);
+  const AlignedBox box = mesh.Bounds();
+  EXPECT_TRUE(box.min.isApprox(Eigen::Vector3d(10, 20, 30))) << box.min.transpose();
+  EXPECT_TRUE(box.max.isApprox(Eigen::Vector3d(11, 21, 30))) << box.max.transpose();
+  fs::remove_all(dir);
+}
+
+TEST(MeshIo, ExportRoundTrip) {
+  const fs::path dir = test::TempDir("export");
+  const Mesh box = MakeBoxMesh(Eigen::Vector3d(-1, -2, -3), Eigen::Vector3d(1, 2, 3));
+  for (const std::string extension : {".ply", ".obj", ".stl", ".glb", ".gltf"}) {
+    const std::string path = (dir / ("box" + extension)).string();
+    ExportMesh(path, box);
+    const Mesh loaded = LoadMesh(path);
+    EXPECT_EQ(loaded.triangles.size(), 12u) << extension;
+    EXPECT_TRUE(loaded.Bounds().min.isApprox(Eigen::Vector3d(-1, -2, -3), 1e-6)) << extension;
+    EXPECT_TRUE(loaded.Bounds().max.isApprox(Eigen::Vector3d(1, 2, 3), 1e-6)) << extension;
+  }
+  // No temporary files are left behind (the .gltf's buffer is a legitimate side file).
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
+    EXPECT_EQ(entry.path().filename().string().rfind(".tmp", 0), std::string::npos)
+        << entry.path();
+  }
+  EXPECT_THROW(ExportMesh((dir / "box.xyz").string(), box), Error);
+  EXPECT_THROW(ExportMesh((dir / "empty.ply").string(), Mesh()), Error);
+  EXPECT_FALSE(fs::exists(dir / "empty.ply"));
+  fs::remove_all(dir);
+}
+
+TEST(MeshIo, MissingGarbageAndEmptyFilesThrowNamingTheFile) {
+  const fs::path dir = test::TempDir("bad");
+  const std::string missing = (dir / "missing.obj").string();
+  const std::string garbage = (dir / "garbage.ply").string();
+  const std::string empty = (dir / "empty.obj").string();
+  const std::string lines_only = (dir / "lines.obj").string();
+  test::WriteText(garbage, std::string("\x01\x02garbage\xff\xfe not a mesh", 24));
+  test::WriteText(empty, "");
+  test::WriteText(lines_only, "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n");
+  for (const std::string& path : {missing, garbage, empty, lines_only}) {
+    try {
+      LoadMesh(path);
+      ADD_FAILURE() << "expected an error for " << path;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+  }
+  fs::remove_all(dir);
+}
+
+TEST(MeshIo, IsMeshFile) {
+  EXPECT_TRUE(IsMeshFile("a/b/car.obj"));
+  EXPECT_TRUE(IsMeshFile("car.OBJ"));
+  EXPECT_TRUE(IsMeshFile("car.ply"));
+  EXPECT_TRUE(IsMeshFile("car.stl"));
+  EXPECT_TRUE(IsMeshFile("car.off"));
+  EXPECT_TRUE(IsMeshFile("car.3ds"));
+  EXPECT_TRUE(IsMeshFile("car.dae"));
+  EXPECT_TRUE(IsMeshFile("car.glb"));
+  EXPECT_TRUE(IsMeshFile("car.gltf"));
+  EXPECT_TRUE(IsMeshFile("car.fbx"));
+  EXPECT_TRUE(IsMeshFile("car.ac"));
+  EXPECT_TRUE(IsMeshFile("car-lod1.acc"));
+  EXPECT_FALSE(IsMeshFile("README.md"));
+  EXPECT_FALSE(IsMeshFile("texture.png"));
+  EXPECT_FALSE(IsMeshFile("manifest.json"));
+  EXPECT_FALSE(IsMeshFile("noextension"));
+  EXPECT_FALSE(IsMeshFile(""));
+}
+
+}  // namespace
+}  // namespace samp
