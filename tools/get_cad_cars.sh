@@ -64,7 +64,14 @@ cars="$cache/cars"
 mkdir -p "$debs" "$extract" "$cars/torcs" "$cars/trigger"
 
 # 1. Download the packages (skipped when a valid .deb is already there).
-deb_of() { ls "$debs/$1"_*_all.deb 2>/dev/null | head -n 1; }
+# The .deb of package $1 in folder $2 (default: $debs), or nothing.
+deb_of() {
+  local f
+  for f in "${2:-$debs}/$1"_*_all.deb; do
+    [ -f "$f" ] && { echo "$f"; return 0; }
+  done
+  return 0
+}
 need_download=()
 for p in "${packages[@]}"; do
   deb="$(deb_of "$p")"
@@ -94,7 +101,7 @@ if [ ${#need_download[@]} -gt 0 ]; then
   (cd "$tmp" && apt-get download -q -o APT::Sandbox::User="$(id -un)" "${need_download[@]}") ||
     die "apt-get download ${need_download[*]} failed (network? 'deb' sources for bookworm main in /etc/apt/sources.list*?)"
   for p in "${need_download[@]}"; do
-    deb="$(ls "$tmp/$p"_*_all.deb 2>/dev/null | head -n 1)"
+    deb="$(deb_of "$p" "$tmp")"
     [ -n "$deb" ] || die "apt-get download did not produce $p's .deb"
     dpkg-deb --info "$deb" >/dev/null 2>&1 || die "downloaded $(basename "$deb") is not a valid .deb"
     mv "$deb" "$debs/"
