@@ -54,6 +54,17 @@ struct Packet<16> {
   static constexpr int kTileWidth = 4, kTileHeight = 4;
 };
 
+// Unit geometric normal of lane j of a packet, flipped to face the ray origin.
+template <typename PacketType>
+Eigen::Vector3f FacingNormal(const PacketType& packet, int j) {
+  Eigen::Vector3f normal(packet.hit.Ng_x[j], packet.hit.Ng_y[j], packet.hit.Ng_z[j]);
+  const float norm = normal.norm();
+  if (norm > 0.f) normal /= norm;
+  const float dot = normal.x() * packet.ray.dir_x[j] + normal.y() * packet.ray.dir_y[j] +
+                    normal.z() * packet.ray.dir_z[j];
+  return dot > 0.f ? Eigen::Vector3f(-normal) : normal;
+}
+
 // Casts `num_rays` rays in packets of N. `ray(i, &origin, &direction)` gives
 // ray i (direction unit length); `out(i)` is where its hit goes.
 template <int N, typename RayFn, typename OutFn>
@@ -100,13 +111,7 @@ void TracePackets(RTCScene scene, int64_t num_rays, float t_far, bool coherent, 
       hit.t = packet.ray.tfar[j];
       hit.geometry = int(packet.hit.geomID[j]);
       hit.triangle = int(packet.hit.primID[j]);
-      Eigen::Vector3f normal(packet.hit.Ng_x[j], packet.hit.Ng_y[j], packet.hit.Ng_z[j]);
-      const float norm = normal.norm();
-      if (norm > 0.f) normal /= norm;
-      const Eigen::Vector3f ray_direction(packet.ray.dir_x[j], packet.ray.dir_y[j],
-                                          packet.ray.dir_z[j]);
-      if (normal.dot(ray_direction) > 0.f) normal = -normal;
-      hit.normal = normal;
+      hit.normal = FacingNormal(packet, j);
     }
   }
 }
@@ -238,41 +243,100 @@ void IntersectOrigin(RTCScene scene, const Eigen::Vector3f& origin,
       [&](int64_t i) -> RayHit& { return hits[i]; });
 }
 
-// Pixels in tiles of Packet<N>::kTileWidth x kTileHeight, row-major tiles within
-// the row band; rays outside the image are masked off by TracePackets' count,
-// so partial tiles at the right/bottom border are handled by a per-tile pass.
-template <int N>
-void IntersectCameraTiles(RTCScene scene, const PinholeCamera& camera,
-                          const Eigen::Isometry3d& world_from_camera, int row_begin, int row_end,
-                          RayHit* hits) {
-  constexpr int kTw = Packet<N>::kTileWidth, kTh = Packet<N>::kTileHeight;
-  const Eigen::Matrix3f rotation = world_from_camera.linear().cast<float>();
+// Casts one ray per pixel of rows [row_begin, row_end) in coherent tiles of
+// Packet<N>::kTileWidth x kTileHeight pixels; lanes outside the image are masked
+// off. The packet is filled in structure-of-arrays form so that the compiler
+// vectorises the direction computation. For every pixel, calls
+// emit(index, packet, lane, z_per_t) with index = (v - row_begin) * width + u and
+// z_per_t the camera z of the unit ray direction (depth = t * z_per_t).
+template <int N, typename Emit>
+void TraceCamera(RTCScene scene, const PinholeCamera& camera,
+                 const Eigen::Isometry3d& world_from_camera, int row_begin, int row_end,
+                 const Emit& emit) {
+  using P = Packet<N>;
+  constexpr int kTw = P::kTileWidth, kTh = P::kTileHeight;
+  const Eigen::Matrix3f r = world_from_camera.linear().cast<float>();
   const Eigen::Vector3f origin = world_from_camera.translation().cast<float>();
   const float inv_fx = float(1.0 / camera.fx), inv_fy = float(1.0 / camera.fy);
   const float cx = float(camera.cx), cy = float(camera.cy);
   const int width = camera.width;
-  const int tiles_x = (width + kTw - 1) / kTw;
+
+  alignas(64) typename P::Type packet;
+  alignas(64) int valid[N];
+  alignas(64) float z_per_t[N];
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  // Embree reads but never writes these ray fields: set them once.
+  for (int j = 0; j < N; ++j) {
+    packet.ray.org_x[j] = origin.x();
+    packet.ray.org_y[j] = origin.y();
+    packet.ray.org_z[j] = origin.z();
+    packet.ray.tnear[j] = 0.f;
+    packet.ray.time[j] = 0.f;
+    packet.ray.mask[j] = ~0u;
+    packet.ray.id[j] = unsigned(j);
+    packet.ray.flags[j] = 0;
+    packet.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+  }
   for (int v0 = row_begin; v0 < row_end; v0 += kTh) {
-    const int tile_rows = std::min(kTh, row_end - v0);
-    for (int tx = 0; tx < tiles_x; ++tx) {
-      const int u0 = tx * kTw;
-      const int tile_cols = std::min(kTw, width - u0);
-      // Lanes of a partial tile are packed densely: lane j -> (j % tile_cols, j / tile_cols).
-      const int count = tile_cols * tile_rows;
-      TracePackets<N>(
-          scene, count, std::numeric_limits<float>::infinity(), /*coherent=*/true,
-          [&](int64_t j, Eigen::Vector3f* o, Eigen::Vector3f* direction) {
-            const int u = u0 + int(j) % tile_cols, v = v0 + int(j) / tile_cols;
-            const Eigen::Vector3f d((float(u) - cx) * inv_fx, (float(v) - cy) * inv_fy, 1.f);
-            *o = origin;
-            *direction = rotation * d.normalized();
-          },
-          [&](int64_t j) -> RayHit& {
-            const int u = u0 + int(j) % tile_cols, v = v0 + int(j) / tile_cols;
-            return hits[int64_t(v - row_begin) * width + u];
-          });
+    for (int u0 = 0; u0 < width; u0 += kTw) {
+      const float x0 = (float(u0) - cx) * inv_fx, y0 = (float(v0) - cy) * inv_fy;
+      for (int j = 0; j < N; ++j) {
+        const int du = j % kTw, dv = j / kTw;
+        const float x = x0 + float(du) * inv_fx, y = y0 + float(dv) * inv_fy;
+        const float inv_norm = 1.f / std::sqrt(x * x + y * y + 1.f);
+        packet.ray.dir_x[j] = (r(0, 0) * x + r(0, 1) * y + r(0, 2)) * inv_norm;
+        packet.ray.dir_y[j] = (r(1, 0) * x + r(1, 1) * y + r(1, 2)) * inv_norm;
+        packet.ray.dir_z[j] = (r(2, 0) * x + r(2, 1) * y + r(2, 2)) * inv_norm;
+        packet.ray.tfar[j] = std::numeric_limits<float>::infinity();
+        packet.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+        z_per_t[j] = inv_norm;
+        valid[j] = (u0 + du < width && v0 + dv < row_end) ? -1 : 0;
+      }
+      P::Intersect(valid, scene, &context, &packet);
+      for (int j = 0; j < N; ++j) {
+        if (!valid[j]) continue;
+        const int du = j % kTw, dv = j / kTw;
+        emit(int64_t(v0 + dv - row_begin) * width + (u0 + du), packet, j, z_per_t[j]);
+      }
     }
   }
+}
+
+template <int N>
+void IntersectCameraHits(RTCScene scene, const PinholeCamera& camera,
+                         const Eigen::Isometry3d& world_from_camera, int row_begin, int row_end,
+                         RayHit* hits) {
+  TraceCamera<N>(scene, camera, world_from_camera, row_begin, row_end,
+                 [&](int64_t index, const typename Packet<N>::Type& packet, int j, float) {
+                   RayHit& hit = hits[index];
+                   if (packet.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID) {
+                     hit = RayHit();
+                     return;
+                   }
+                   hit.t = packet.ray.tfar[j];
+                   hit.geometry = int(packet.hit.geomID[j]);
+                   hit.triangle = int(packet.hit.primID[j]);
+                   hit.normal = FacingNormal(packet, j);
+                 });
+}
+
+template <int N>
+void IntersectCameraBuffers(RTCScene scene, const PinholeCamera& camera,
+                            const Eigen::Isometry3d& world_from_camera, int row_begin, int row_end,
+                            const EmbreeScene::ImageOutputs& out) {
+  TraceCamera<N>(
+      scene, camera, world_from_camera, row_begin, row_end,
+      [&](int64_t index, const typename Packet<N>::Type& packet, int j, float z_per_t) {
+        const bool hit = packet.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID;
+        if (out.depth) {
+          out.depth[index] = hit ? packet.ray.tfar[j] * z_per_t : std::numeric_limits<float>::infinity();
+        }
+        if (out.geometry) out.geometry[index] = hit ? int32_t(packet.hit.geomID[j]) : -1;
+        if (out.triangle) out.triangle[index] = hit ? int32_t(packet.hit.primID[j]) : -1;
+        if (out.normal) out.normal[index] = hit ? FacingNormal(packet, j) : Eigen::Vector3f::Zero();
+      });
 }
 
 }  // namespace
@@ -304,24 +368,37 @@ void EmbreeScene::IntersectFromOrigin(const Eigen::Vector3f& origin,
   impl_->ThrowIfError("rtcIntersect");
 }
 
+namespace {
+void CheckCameraRows(const PinholeCamera& camera, int row_begin, int row_end) {
+  SAMP_CHECK(camera.width > 0 && camera.height > 0 && camera.fx > 0 && camera.fy > 0)
+      << "EmbreeScene: invalid camera " << camera.width << "x" << camera.height << ", fx "
+      << camera.fx << ", fy " << camera.fy;
+  SAMP_CHECK(0 <= row_begin && row_begin <= row_end && row_end <= camera.height)
+      << "EmbreeScene: rows [" << row_begin << ", " << row_end << ") outside the image of height "
+      << camera.height;
+}
+}  // namespace
+
 void EmbreeScene::IntersectCamera(const PinholeCamera& camera,
                                   const Eigen::Isometry3d& world_from_camera, int row_begin,
                                   int row_end, RayHit* hits) const {
-  SAMP_CHECK(camera.width > 0 && camera.height > 0 && camera.fx > 0 && camera.fy > 0)
-      << "EmbreeScene::IntersectCamera: invalid camera " << camera.width << "x" << camera.height;
-  SAMP_CHECK(0 <= row_begin && row_begin <= row_end && row_end <= camera.height)
-      << "EmbreeScene::IntersectCamera: rows [" << row_begin << ", " << row_end
-      << ") outside the image of height " << camera.height;
+  CheckCameraRows(camera, row_begin, row_end);
   switch (impl_->packet_size) {
-    case 16:
-      IntersectCameraTiles<16>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits);
-      break;
-    case 8:
-      IntersectCameraTiles<8>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits);
-      break;
-    default:
-      IntersectCameraTiles<4>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits);
-      break;
+    case 16: IntersectCameraHits<16>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits); break;
+    case 8: IntersectCameraHits<8>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits); break;
+    default: IntersectCameraHits<4>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits); break;
+  }
+  impl_->ThrowIfError("rtcIntersect");
+}
+
+void EmbreeScene::IntersectCameraImage(const PinholeCamera& camera,
+                                       const Eigen::Isometry3d& world_from_camera, int row_begin,
+                                       int row_end, const ImageOutputs& outputs) const {
+  CheckCameraRows(camera, row_begin, row_end);
+  switch (impl_->packet_size) {
+    case 16: IntersectCameraBuffers<16>(impl_->scene, camera, world_from_camera, row_begin, row_end, outputs); break;
+    case 8: IntersectCameraBuffers<8>(impl_->scene, camera, world_from_camera, row_begin, row_end, outputs); break;
+    default: IntersectCameraBuffers<4>(impl_->scene, camera, world_from_camera, row_begin, row_end, outputs); break;
   }
   impl_->ThrowIfError("rtcIntersect");
 }

@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -49,6 +50,20 @@ class EmbreeScene {
   // (row_end - row_begin) * width entries. Thread-safe.
   void IntersectCamera(const PinholeCamera& camera, const Eigen::Isometry3d& world_from_camera,
                        int row_begin, int row_end, RayHit* hits) const;
+
+  // Image outputs of IntersectCameraImage; null pointers are not written. Each
+  // points at (row_end - row_begin) * width entries, row-major from row_begin.
+  struct ImageOutputs {
+    float* depth = nullptr;             // z in the camera, inf = miss
+    int32_t* geometry = nullptr;        // mesh index, -1 = miss
+    int32_t* triangle = nullptr;        // triangle index within the mesh, -1 = miss
+    Eigen::Vector3f* normal = nullptr;  // unit geometric normal in the scene frame, facing
+                                        // the camera; zero = miss
+  };
+  // Same rays as IntersectCamera, written straight into image buffers (the
+  // scanner's and renderer's path: no intermediate RayHit per pixel). Thread-safe.
+  void IntersectCameraImage(const PinholeCamera& camera, const Eigen::Isometry3d& world_from_camera,
+                            int row_begin, int row_end, const ImageOutputs& outputs) const;
 
   // Number of rays per Embree packet used (16, 8 or 4, the widest the CPU runs natively).
   int PacketSize() const;

@@ -41,32 +41,16 @@ RenderBuffers Render(const PinholeCamera& camera, const std::vector<PlacedMesh>&
   constexpr int kBandRows = 8;
   const int num_bands = (camera.height + kBandRows - 1) / kBandRows;
   tbb::parallel_for(tbb::blocked_range<int>(0, num_bands), [&](const tbb::blocked_range<int>& range) {
-    std::vector<RayHit> hits;
     for (int band = range.begin(); band != range.end(); ++band) {
       const int row_begin = band * kBandRows;
       const int row_end = std::min(camera.height, row_begin + kBandRows);
-      hits.resize(size_t(row_end - row_begin) * camera.width);
-      scene.IntersectCamera(camera, Eigen::Isometry3d::Identity(), row_begin, row_end, hits.data());
-      for (int v = row_begin; v < row_end; ++v) {
-        const float ray_y = float((v - camera.cy) / camera.fy);
-        for (int u = 0; u < camera.width; ++u) {
-          const size_t pixel = size_t(v) * camera.width + u;
-          const RayHit& hit = hits[size_t(v - row_begin) * camera.width + u];
-          if (hit.Hit()) {
-            const float ray_x = float((u - camera.cx) / camera.fx);
-            // t is along the unit direction; z = t / |(x, y, 1)|.
-            buffers.depth[pixel] = hit.t / std::sqrt(ray_x * ray_x + ray_y * ray_y + 1.f);
-            buffers.mesh_index[pixel] = hit.geometry;
-            buffers.triangle[pixel] = hit.triangle;
-            buffers.normal[pixel] = hit.normal;
-          } else {
-            buffers.depth[pixel] = std::numeric_limits<float>::infinity();
-            buffers.mesh_index[pixel] = -1;
-            buffers.triangle[pixel] = -1;
-            buffers.normal[pixel] = Eigen::Vector3f::Zero();
-          }
-        }
-      }
+      const size_t offset = size_t(row_begin) * camera.width;
+      EmbreeScene::ImageOutputs outputs;
+      outputs.depth = buffers.depth.data() + offset;
+      outputs.geometry = buffers.mesh_index.data() + offset;
+      outputs.triangle = buffers.triangle.data() + offset;
+      outputs.normal = buffers.normal.data() + offset;
+      scene.IntersectCameraImage(camera, Eigen::Isometry3d::Identity(), row_begin, row_end, outputs);
     }
   });
   return buffers;

@@ -76,39 +76,26 @@ ScanResult ScanMesh(const Mesh& mesh, const ScanOptions& options) {
   camera.cx = 0.5 * (options.width - 1);
   camera.cy = 0.5 * (options.height - 1);
 
-  // Per pixel: z component of the unit ray direction (depth = t * z).
-  const int64_t num_pixels = int64_t(options.width) * options.height;
-  std::vector<float> ray_z(num_pixels);
-  for (int v = 0; v < options.height; ++v) {
-    for (int u = 0; u < options.width; ++u) {
-      ray_z[int64_t(v) * options.width + u] = float(1.0 / camera.Ray(u, v).norm());
-    }
-  }
-
   ScanResult result;
   result.triangle_seen.assign(mesh.triangles.size(), 0);
   result.views.reserve(options.num_views);
-  std::vector<RayHit> hits(num_pixels);
+  const int64_t num_pixels = int64_t(options.width) * options.height;
   const double distance = options.distance_factor * radius;
   for (const Eigen::Vector3d& direction : FibonacciSphere(options.num_views)) {
     const Eigen::Isometry3d object_from_camera = LookAt(center + distance * direction, center);
-    scene.IntersectCamera(camera, object_from_camera, 0, options.height, hits.data());
     ScanView view;
     view.camera = camera;
     view.camera_from_object = object_from_camera.inverse();
     view.depth.resize(num_pixels);
     view.triangle.resize(num_pixels);
-    for (int64_t i = 0; i < num_pixels; ++i) {
-      const RayHit& hit = hits[i];
-      if (hit.Hit()) {
-        view.depth[i] = hit.t * ray_z[i];
-        view.triangle[i] = hit.triangle;
-        result.triangle_seen[hit.triangle] = 1;
-        ++result.num_hits;
-      } else {
-        view.depth[i] = std::numeric_limits<float>::infinity();
-        view.triangle[i] = -1;
-      }
+    EmbreeScene::ImageOutputs outputs;
+    outputs.depth = view.depth.data();
+    outputs.triangle = view.triangle.data();
+    scene.IntersectCameraImage(camera, object_from_camera, 0, options.height, outputs);
+    for (const int32_t triangle : view.triangle) {
+      if (triangle < 0) continue;
+      result.triangle_seen[triangle] = 1;
+      ++result.num_hits;
     }
     result.num_rays += num_pixels;
     result.views.push_back(std::move(view));

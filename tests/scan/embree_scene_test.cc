@@ -116,6 +116,29 @@ TEST(EmbreeScene, OriginAndCameraPathsAgreeWithGeneralRays) {
     }
   }
   EXPECT_GT(num_hits, 100);
+  // The image path gives the same hits, depth = z in the camera.
+  const size_t n = general.size();
+  std::vector<float> depth(n);
+  std::vector<int32_t> geometry(n), triangle(n);
+  std::vector<Eigen::Vector3f> normal(n);
+  EmbreeScene::ImageOutputs outputs;
+  outputs.depth = depth.data();
+  outputs.geometry = geometry.data();
+  outputs.triangle = triangle.data();
+  outputs.normal = normal.data();
+  scene.IntersectCameraImage(camera, world_from_camera, 0, camera.height, outputs);
+  for (size_t i = 0; i < n; ++i) {
+    ASSERT_EQ(geometry[i], general[i].geometry) << i;
+    ASSERT_EQ(triangle[i], general[i].triangle) << i;
+    if (!general[i].Hit()) {
+      ASSERT_TRUE(std::isinf(depth[i]));
+      continue;
+    }
+    const Eigen::Vector3f point_in_world = origins[i] + general[i].t * directions[i];
+    const Eigen::Vector3d point_in_camera = world_from_camera.inverse() * point_in_world.cast<double>();
+    EXPECT_NEAR(depth[i], point_in_camera.z(), 1e-4);
+    EXPECT_TRUE(normal[i].isApprox(general[i].normal, 1e-5));
+  }
   EXPECT_LT(num_hits, int(general.size()));
   EXPECT_THROW(scene.IntersectCamera(camera, world_from_camera, 0, 24, tiled.data()), Error);
 }
