@@ -25,7 +25,7 @@ constexpr char kEigenvaluesKey[] = "samp_eigenvalues";
 constexpr char kTotalVarianceKey[] = "samp_total_variance";
 constexpr char kTrainingShapesKey[] = "samp_training_shapes";
 constexpr char kOptionsKey[] = "samp_options";
-constexpr char kChecksumKey[] = "samp_checksum";
+constexpr char kChecksumKey[] = "samp_model_checksum";
 constexpr char kMeanGrid[] = "mean";
 
 // FNV-1a (64 bit) over the bytes of the grids' values (mean, pc_0, ...) and

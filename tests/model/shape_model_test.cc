@@ -1,0 +1,368 @@
+#include "libsamp/model/shape_model.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "libsamp/core/error.h"
+#include "libsamp/sdf/vdb_io.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+
+class TempDir {
+ public:
+  TempDir() {
+    path_ = fs::temp_directory_path() /
+            ("samp_model_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter_++));
+    fs::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  std::string File(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  static inline int counter_ = 0;
+  fs::path path_;
+};
+
+ShapeModel RandomModel(int num_components, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> uniform(-1.0f, 1.0f);
+  ShapeModel model;
+  model.grid.origin = Eigen::Vector3d(-0.31, -0.22, -0.27);
+  model.grid.voxel_size = 0.1;
+  model.grid.dims = Eigen::Vector3i(7, 6, 5);
+  const int64_t dim = model.grid.NumVoxels();
+  model.mean.resize(dim);
+  for (int64_t i = 0; i < dim; ++i) model.mean[i] = uniform(rng);
+  model.components.resize(dim, num_components);
+  for (int64_t i = 0; i < model.components.size(); ++i) model.components.data()[i] = uniform(rng);
+  model.eigenvalues.resize(num_components);
+  for (int r = 0; r < num_components; ++r) model.eigenvalues[r] = 1.0 / (r + 1);
+  model.total_variance = 3.5;
+  model.training_shapes = {"sedan", "van", "hatch back"};
+  model.options_json = R"({"pca":{"num_components":3},"voxel":0.1})";
+  return model;
+}
+
+// Independent reference: trilinear interpolation of a dense grid by brute
+// force (the 8 weights from the fractional voxel coordinates), with the
+// documented continuation outside the box.
+double BruteForce(const GridSpec& grid, const Eigen::VectorXf& shape, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d lo = grid.MinCorner(), hi = grid.MaxCorner();
+  const Eigen::Vector3d q = p.cwiseMax(lo).cwiseMin(hi);
+  const Eigen::Vector3d x = grid.ToVoxel(q);
+  double value = 0.0;
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const double w = std::max(0.0, 1.0 - std::abs(x.x() - i)) *
+                         std::max(0.0, 1.0 - std::abs(x.y() - j)) *
+                         std::max(0.0, 1.0 - std::abs(x.z() - k));
+        value += w * shape[grid.Index(i, j, k)];
+      }
+  return value + (p - q).norm();
+}
+
+// Random points within `margin` metres around the grid box, away from cell
+// faces (where the trilinear gradient jumps) and from the box faces.
+std::vector<Eigen::Vector3d> RandomPoints(const GridSpec& grid, double margin, int n,
+                                          unsigned seed) {
+  std::mt19937 rng(seed);
+  std::vector<Eigen::Vector3d> points;
+  const Eigen::Vector3d lo = grid.MinCorner().array() - margin;
+  const Eigen::Vector3d hi = grid.MaxCorner().array() + margin;
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  while (int(points.size()) < n) {
+    Eigen::Vector3d p;
+    for (int a = 0; a < 3; ++a) p[a] = lo[a] + (hi[a] - lo[a]) * unit(rng);
+    const Eigen::Vector3d x = grid.ToVoxel(p);
+    bool near_face = false;
+    for (int a = 0; a < 3; ++a) near_face |= std::abs(x[a] - std::round(x[a])) < 1e-3;
+    if (!near_face) points.push_back(p);
+  }
+  return points;
+}
+
+TEST(ShapeModel, EvaluateMatchesBruteForceTrilinear) {
+  const ShapeModel model = RandomModel(3, 1);
+  const Eigen::VectorXd z = Eigen::Vector3d(0.7, -1.3, 0.4);
+  const Eigen::VectorXf shape = model.Shape(z);
+  ASSERT_EQ(shape.size(), model.NumVoxels());
+  for (const auto& p : RandomPoints(model.grid, 0.4, 400, 2)) {
+    EXPECT_NEAR(model.Evaluate(z, p), BruteForce(model.grid, shape, p), 1e-5) << p.transpose();
+    EXPECT_NEAR(model.EvaluateDense(shape.data(), p.data(), nullptr), model.Evaluate(z, p), 1e-5);
+  }
+  // At the samples the lookup returns the sample.
+  for (int k : {0, 2, 4})
+    for (int j : {0, 5})
+      for (int i : {0, 3, 6}) {
+        EXPECT_NEAR(model.Evaluate(z, model.grid.Position(i, j, k)),
+                    shape[model.grid.Index(i, j, k)], 1e-5);
+      }
+}
+
+TEST(ShapeModel, GradientsMatchFiniteDifferencesInsideAndOutside) {
+  const ShapeModel model = RandomModel(3, 3);
+  const Eigen::VectorXd z = Eigen::Vector3d(-0.2, 0.9, 1.1);
+  const double step = 1e-6;
+  int num_outside = 0;
+  for (const auto& p : RandomPoints(model.grid, 0.5, 500, 4)) {
+    const bool outside =
+        !((p.array() >= model.grid.MinCorner().array()).all() &&
+          (p.array() <= model.grid.MaxCorner().array()).all());
+    num_outside += outside;
+    Eigen::Vector3d d_point;
+    Eigen::VectorXd d_z;
+    const double value = model.Evaluate(z, p, &d_point, &d_z);
+    EXPECT_EQ(value, model.Evaluate(z, p));
+    for (int a = 0; a < 3; ++a) {
+      Eigen::Vector3d plus = p, minus = p;
+      plus[a] += step;
+      minus[a] -= step;
+      const double numeric = (model.Evaluate(z, plus) - model.Evaluate(z, minus)) / (2 * step);
+      EXPECT_NEAR(d_point[a], numeric, 1e-6 * (1.0 + std::abs(numeric)))
+          << "axis " << a << " at " << p.transpose() << (outside ? " (outside)" : "");
+    }
+    ASSERT_EQ(d_z.size(), 3);
+    for (int r = 0; r < 3; ++r) {
+      Eigen::VectorXd plus = z, minus = z;
+      plus[r] += 1e-3;
+      minus[r] -= 1e-3;
+      const double numeric = (model.Evaluate(plus, p) - model.Evaluate(minus, p)) / 2e-3;
+      EXPECT_NEAR(d_z[r], numeric, 1e-6) << "component " << r;
+    }
+    // The raw-pointer paths agree.
+    double d_point_raw[3], d_z_raw[3], d_z_code[3], d_point_dense[3];
+    EXPECT_EQ(model.Evaluate(z.data(), p.data(), d_point_raw, d_z_raw), value);
+    model.CodeGradient(p.data(), d_z_code);
+    const Eigen::VectorXf shape = model.Shape(z);
+    EXPECT_NEAR(model.EvaluateDense(shape.data(), p.data(), d_point_dense), value, 1e-5);
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(d_point_raw[i], d_point[i]);
+      EXPECT_EQ(d_z_raw[i], d_z[i]);
+      EXPECT_NEAR(d_z_code[i], d_z[i], 1e-12);
+      EXPECT_NEAR(d_point_dense[i], d_point[i], 1e-4);
+    }
+  }
+  EXPECT_GT(num_outside, 100);
+  EXPECT_LT(num_outside, 490);
+}
+
+TEST(ShapeModel, FarOutsideGradientPointsAwayFromTheGrid) {
+  const ShapeModel model = RandomModel(2, 5);
+  const Eigen::VectorXd z = Eigen::Vector2d(0.3, -0.5);
+  const Eigen::Vector3d centre = 0.5 * (model.grid.MinCorner() + model.grid.MaxCorner());
+  for (const Eigen::Vector3d offset :
+       {Eigen::Vector3d(5, 0, 0), Eigen::Vector3d(0, -4, 0), Eigen::Vector3d(0, 0, 3),
+        Eigen::Vector3d(-3, 2, 1), Eigen::Vector3d(2, 2, -2)}) {
+    const Eigen::Vector3d p = centre + offset;
+    Eigen::Vector3d gradient;
+    const double value = model.Evaluate(z, p, &gradient);
+    EXPECT_GT(gradient.norm(), 0.99);
+    EXPECT_GT(gradient.dot(p - centre), 0.0) << offset.transpose();
+    // Moving away increases the value by about the distance moved.
+    EXPECT_NEAR(model.Evaluate(z, p + 0.1 * offset.normalized()) - value, 0.1, 0.05);
+  }
+}
+
+TEST(ShapeModel, NonFinitePointGivesNaN) {
+  const ShapeModel model = RandomModel(2, 6);
+  const Eigen::VectorXd z = Eigen::Vector2d(0.0, 0.0);
+  Eigen::Vector3d d_point;
+  Eigen::VectorXd d_z;
+  EXPECT_TRUE(std::isnan(model.Evaluate(z, Eigen::Vector3d(NAN, 0, 0), &d_point, &d_z)));
+  EXPECT_TRUE(std::isnan(d_point[0]));
+  EXPECT_TRUE(std::isnan(d_z[1]));
+  EXPECT_TRUE(std::isnan(model.Evaluate(z, Eigen::Vector3d(0, INFINITY, 0))));
+  EXPECT_THROW(model.Evaluate(Eigen::Vector3d(1, 2, 3), Eigen::Vector3d::Zero()), Error);
+}
+
+TEST(ShapeModel, FileRoundTrip) {
+  TempDir dir;
+  ShapeModel model = RandomModel(3, 7);
+  model.mean[5] = 0.0f;  // background values round-trip too
+  model.mean[6] = -0.0f;
+  model.components(9, 1) = 0.0f;
+  const std::string path = dir.File("model.vdb");
+  model.Save(path);
+  const ShapeModel loaded = ShapeModel::Load(path);
+  EXPECT_EQ(loaded.grid, model.grid);
+  EXPECT_EQ(loaded.grid.voxel_size, model.grid.voxel_size);
+  EXPECT_TRUE(loaded.mean == model.mean);
+  EXPECT_TRUE(loaded.components == model.components);
+  EXPECT_TRUE(loaded.eigenvalues == model.eigenvalues);
+  EXPECT_EQ(loaded.total_variance, model.total_variance);
+  EXPECT_EQ(loaded.training_shapes, model.training_shapes);
+  EXPECT_EQ(nlohmann::json::parse(loaded.options_json), nlohmann::json::parse(model.options_json));
+  // Lookups agree after the round trip.
+  const Eigen::VectorXd z = Eigen::Vector3d(0.1, 0.2, -0.3);
+  for (const auto& p : RandomPoints(model.grid, 0.2, 50, 8)) {
+    EXPECT_EQ(loaded.Evaluate(z, p), model.Evaluate(z, p));
+  }
+  // Overwriting an existing file works and leaves no temporary behind.
+  model.Save(path);
+  int num_files = 0;
+  for (const auto& entry : fs::directory_iterator(fs::path(path).parent_path())) {
+    (void)entry;
+    ++num_files;
+  }
+  EXPECT_EQ(num_files, 1);
+}
+
+TEST(ShapeModel, VdbPrintListsTheModel) {
+  if (std::system("command -v vdb_print > /dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "vdb_print (libopenvdb-tools) is not installed";
+  }
+  TempDir dir;
+  const std::string path = dir.File("model.vdb");
+  RandomModel(2, 9).Save(path);
+  const std::string listing = dir.File("listing.txt");
+  ASSERT_EQ(std::system(("vdb_print -l -m '" + path + "' > '" + listing + "' 2>&1").c_str()), 0);
+  std::ifstream in(listing);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* expected : {"mean", "pc_0", "pc_1", "samp_format_version", "samp_eigenvalues"}) {
+    EXPECT_NE(text.find(expected), std::string::npos) << expected << " not in:\n" << text;
+  }
+}
+
+void ExpectLoadError(const std::string& path, const std::string& message_part) {
+  try {
+    ShapeModel::Load(path);
+    ADD_FAILURE() << "no error loading " << path;
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(message_part), std::string::npos)
+        << "message: " << e.what();
+  }
+}
+
+std::string ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+void WriteBytes(const std::string& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary);
+  out << bytes;
+}
+
+TEST(ShapeModel, TruncatedFilesGiveErrors) {
+  TempDir dir;
+  const std::string path = dir.File("model.vdb");
+  RandomModel(3, 10).Save(path);
+  const std::string bytes = ReadBytes(path);
+  ASSERT_GT(bytes.size(), 100u);
+  for (const double keep : {0.0, 0.05, 0.3, 0.5, 0.8, 0.95, 0.999}) {
+    const std::string truncated = dir.File("truncated.vdb");
+    WriteBytes(truncated, bytes.substr(0, size_t(keep * bytes.size())));
+    SCOPED_TRACE("kept " + std::to_string(keep));
+    EXPECT_THROW(ShapeModel::Load(truncated), Error);
+  }
+}
+
+TEST(ShapeModel, CorruptFilesGiveErrorsNotCrashes) {
+  TempDir dir;
+  const std::string path = dir.File("model.vdb");
+  RandomModel(3, 11).Save(path);
+  const std::string bytes = ReadBytes(path);
+  std::mt19937 rng(12);
+  int num_errors = 0;
+  // Flip bytes all over the file: every load either throws samp::Error or (if
+  // the byte did not matter, e.g. padding) returns the identical model.
+  const ShapeModel original = ShapeModel::Load(path);
+  for (int trial = 0; trial < 60; ++trial) {
+    std::string corrupt = bytes;
+    const size_t at = size_t(trial) * bytes.size() / 60 + rng() % 7;
+    corrupt[std::min(at, bytes.size() - 1)] ^= char(1 + rng() % 255);
+    const std::string corrupt_path = dir.File("corrupt.vdb");
+    WriteBytes(corrupt_path, corrupt);
+    try {
+      const ShapeModel loaded = ShapeModel::Load(corrupt_path);
+      EXPECT_TRUE(loaded.mean == original.mean && loaded.components == original.components &&
+                  loaded.eigenvalues == original.eigenvalues)
+          << "byte " << at << " changed the model silently";
+    } catch (const Error&) {
+      ++num_errors;
+    }
+  }
+  EXPECT_GT(num_errors, 30);
+  const std::string text = dir.File("text.vdb");
+  WriteBytes(text, "this is not a vdb file\n");
+  EXPECT_THROW(ShapeModel::Load(text), Error);
+  ExpectLoadError(dir.File("missing.vdb"), "missing.vdb");
+}
+
+TEST(ShapeModel, ForeignAndMismatchedVdbFilesGiveErrors) {
+  TempDir dir;
+  const ShapeModel model = RandomModel(2, 13);
+  std::vector<DenseGrid> grids(3);
+  grids[0].name = "mean";
+  grids[1].name = "pc_0";
+  grids[2].name = "pc_1";
+  for (auto& g : grids) g.values.assign(size_t(model.NumVoxels()), 0.5f);
+
+  // A .vdb without samp model metadata (e.g. a fog volume).
+  const std::string foreign = dir.File("foreign.vdb");
+  WriteVdb(foreign, model.grid, {DenseGrid{"density", grids[0].values}}, {});
+  ExpectLoadError(foreign, "not a samp model file");
+  // A per-model SDF file of the trainer.
+  const std::string sdf = dir.File("sdf.vdb");
+  WriteVdb(sdf, model.grid, {DenseGrid{"sdf", grids[0].values}}, {{"samp_file_type", "sdf"}});
+  ExpectLoadError(sdf, "not a samp model file");
+
+  // Take a valid file's metadata and break one thing at a time.
+  const std::string valid = dir.File("valid.vdb");
+  model.Save(valid);
+  GridSpec spec;
+  VdbMetadata meta;
+  ReadVdb(valid, &spec, &meta);
+  const std::string broken = dir.File("broken.vdb");
+  auto write = [&](const std::vector<DenseGrid>& g, VdbMetadata m) { WriteVdb(broken, spec, g, m); };
+
+  VdbMetadata m = meta;
+  m["samp_format_version"] = "2";
+  write(grids, m);
+  ExpectLoadError(broken, "format version 2");
+
+  m = meta;
+  m["samp_num_components"] = "3";
+  write(grids, m);
+  ExpectLoadError(broken, "eigenvalues");
+
+  m = meta;
+  m["samp_eigenvalues"] = "[1.0]";
+  write(grids, m);
+  ExpectLoadError(broken, "1 eigenvalues for 2 components");
+
+  m = meta;
+  m["samp_eigenvalues"] = "[1.0, oops";
+  write(grids, m);
+  ExpectLoadError(broken, "samp_eigenvalues");
+
+  write({grids[0], grids[1]}, meta);
+  ExpectLoadError(broken, "'pc_1' is missing");
+
+  std::vector<DenseGrid> with_nan = grids;
+  with_nan[1].values[3] = std::nanf("");
+  write(with_nan, meta);
+  EXPECT_THROW(ShapeModel::Load(broken), Error);
+
+  // Valid structure, different values: the checksum catches it.
+  write(grids, meta);
+  ExpectLoadError(broken, "checksum");
+}
+
+}  // namespace
+}  // namespace samp
