@@ -1,0 +1,313 @@
+#include "libsamp/model/trainer.h"
+
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "libsamp/core/error.h"
+#include "libsamp/core/log.h"
+#include "libsamp/core/progress.h"
+#include "libsamp/scan/canonical.h"
+#include "libsamp/scan/mesh_io.h"
+#include "libsamp/sdf/vdb_io.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+nlohmann::json Vector3Json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+nlohmann::json CanonicalizeJson(const CanonicalizeOptions& c) {
+  nlohmann::json j;
+  if (c.scale) j["scale"] = *c.scale;
+  if (c.target_length) j["target_length"] = *c.target_length;
+  j["up"] = c.up;
+  j["forward"] = c.forward;
+  j["min_size"] = Vector3Json(c.min_size);
+  j["max_size"] = Vector3Json(c.max_size);
+  return j;
+}
+
+// One mesh file of the CAD folder and how to treat it.
+struct Job {
+  std::string path;           // as found
+  std::string relative_path;  // relative to the CAD folder, '/'-separated
+  std::string name;
+  CanonicalizeOptions canonicalize;
+  bool skip = false;
+  std::string skip_reason;
+};
+
+std::vector<Job> FindJobs(const TrainOptions& options, const Manifest* manifest) {
+  const fs::path folder(options.cad_folder);
+  std::error_code ec;
+  SAMP_CHECK(fs::is_directory(folder, ec))
+      << "CAD folder '" << options.cad_folder << "' is not a directory";
+  std::vector<Job> jobs;
+  for (auto it = fs::recursive_directory_iterator(
+           folder, fs::directory_options::follow_directory_symlink, ec);
+       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+    if (!it->is_regular_file(ec) || !IsMeshFile(it->path().string())) continue;
+    Job job;
+    job.path = it->path().string();
+    job.relative_path = it->path().lexically_relative(folder).generic_string();
+    jobs.push_back(std::move(job));
+  }
+  SAMP_CHECK(!ec) << "cannot list CAD folder '" << options.cad_folder << "': " << ec.message();
+  std::sort(jobs.begin(), jobs.end(),
+            [](const Job& a, const Job& b) { return a.relative_path < b.relative_path; });
+  SAMP_CHECK(!jobs.empty()) << "no mesh files (any format assimp reads) in CAD folder '"
+                            << options.cad_folder << "'";
+
+  std::map<const ManifestEntry*, int> matched;
+  for (Job& job : jobs) {
+    const ManifestEntry* entry = manifest != nullptr ? manifest->Find(job.relative_path) : nullptr;
+    if (entry != nullptr) {
+      ++matched[entry];
+      job.name = entry->name;
+      job.canonicalize = entry->canonicalize;
+      job.skip = entry->skip;
+      job.skip_reason = entry->skip_reason.empty() ? "no reason given" : entry->skip_reason;
+    } else {
+      job.name = fs::path(job.relative_path).stem().string();
+      if (manifest != nullptr) job.canonicalize = manifest->defaults;
+    }
+  }
+  if (manifest != nullptr) {
+    for (const ManifestEntry& entry : manifest->entries) {
+      if (matched.count(&entry) == 0) {
+        LogWarning() << "manifest entry '" << entry.file << "' matches no mesh file in '"
+                     << options.cad_folder << "'";
+      }
+    }
+  }
+  // Names must be unique (they name the training shapes and the SDF files):
+  // clashing ones become their relative path without extension.
+  std::map<std::string, int> count;
+  for (const Job& job : jobs) ++count[job.name];
+  for (Job& job : jobs) {
+    if (count[job.name] > 1) {
+      const fs::path relative(job.relative_path);
+      job.name = (relative.parent_path() / relative.stem()).generic_string();
+      std::replace(job.name.begin(), job.name.end(), '/', '_');
+    }
+  }
+  return jobs;
+}
+
+// The per-model SDF file: one FloatGrid "sdf" with the model's provenance.
+void SaveModelSdf(const std::string& path, const Sdf& sdf, const Job& job,
+                  const CanonicalizeResult& canonical) {
+  VdbMetadata meta;
+  meta["samp_file_type"] = "sdf";
+  meta["samp_name"] = job.name;
+  meta["samp_source_file"] = job.relative_path;
+  meta["samp_scale"] = nlohmann::json(canonical.scale).dump();
+  meta["samp_up"] = canonical.up;
+  meta["samp_forward"] = canonical.forward;
+  meta["samp_size"] = Vector3Json(canonical.size).dump();
+  meta["samp_inside_fraction"] = nlohmann::json(sdf.summary.inside_fraction).dump();
+  WriteVdb(path, sdf.grid, {DenseGrid{"sdf", sdf.values}}, meta);
+}
+
+std::string FormatFixed(double value, int digits) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, value);
+  return buffer;
+}
+
+}  // namespace
+
+void TrainOptions::Check() const {
+  SAMP_CHECK(!cad_folder.empty()) << "train: cad_folder must be given";
+  SAMP_CHECK(!output_path.empty()) << "train: output_path must be given";
+  SAMP_CHECK(num_threads >= 0) << "train: num_threads must be >= 0 (0 = all cores), got "
+                               << num_threads;
+  grid.Check();
+  scan.Check();
+  sdf.Check();
+  pca.Check();
+}
+
+std::string TrainOptions::ToJson() const {
+  nlohmann::json j;
+  j["cad_folder"] = cad_folder;
+  j["manifest"] = manifest_path;
+  j["grid"] = {{"origin", Vector3Json(grid.origin)},
+               {"voxel_size", grid.voxel_size},
+               {"dims", {grid.dims.x(), grid.dims.y(), grid.dims.z()}}};
+  j["scan"] = {{"num_views", scan.num_views},
+               {"width", scan.width},
+               {"height", scan.height},
+               {"fov_deg", scan.fov_deg},
+               {"distance_factor", scan.distance_factor}};
+  j["sdf"] = {{"truncation", sdf.truncation},
+              {"carve_margin", sdf.carve_margin},
+              {"min_inside_fraction", sdf.min_inside_fraction}};
+  j["pca"] = {{"num_components", pca.num_components}};
+  return j.dump();
+}
+
+std::string TrainSummary::BriefReport() const {
+  std::ostringstream out;
+  size_t name_width = 5;
+  for (const TrainedShape& s : shapes) name_width = std::max(name_width, s.name.size());
+  char line[512];
+  std::snprintf(line, sizeof(line), "%-*s  %-4s  %-22s  %7s  %7s  %s\n", int(name_width), "model",
+                "used", "size l x h x w (m)", "inside", "time", "file / reason skipped");
+  out << line;
+  for (const TrainedShape& s : shapes) {
+    const std::string size =
+        s.size.isZero() ? "-"
+                        : FormatFixed(s.size.x(), 2) + " x " + FormatFixed(s.size.y(), 2) +
+                              " x " + FormatFixed(s.size.z(), 2);
+    const std::string inside = s.inside_fraction > 0 ? FormatFixed(s.inside_fraction, 3) : "-";
+    const std::string time = s.seconds > 0 ? Progress::FormatDuration(s.seconds) : "-";
+    std::snprintf(line, sizeof(line), "%-*s  %-4s  %-22s  %7s  %7s  %s\n", int(name_width),
+                  s.name.c_str(), s.used ? "yes" : "no", size.c_str(), inside.c_str(),
+                  time.c_str(), s.used ? s.file.c_str() : s.reject_reason.c_str());
+    out << line;
+  }
+  out << "used " << num_used << " of " << shapes.size() << " models";
+  if (eigenvalues.size() > 0) {
+    out << "; PCA with R = " << eigenvalues.size() << "\n";
+    out << "eigenvalues (variances, m^2):";
+    for (int r = 0; r < eigenvalues.size(); ++r) out << " " << eigenvalues[r];
+    out << "\nstandard deviations (m):     ";
+    for (int r = 0; r < eigenvalues.size(); ++r) out << " " << std::sqrt(eigenvalues[r]);
+    out << "\nexplained variance: " << FormatFixed(100.0 * explained_variance, 1) << " %";
+  }
+  out << "\ntotal time: " << Progress::FormatDuration(seconds) << "\n";
+  return out.str();
+}
+
+TrainSummary TrainShapeModel(const TrainOptions& options) {
+  options.Check();
+  const auto start = Clock::now();
+  Manifest manifest;
+  const bool has_manifest = !options.manifest_path.empty();
+  if (has_manifest) manifest = LoadManifest(options.manifest_path);
+  const std::vector<Job> jobs = FindJobs(options, has_manifest ? &manifest : nullptr);
+  const int num_jobs = int(jobs.size());
+  LogInfo() << "training a shape model from " << num_jobs << " mesh files in "
+            << options.cad_folder << " on the grid " << options.grid.ToString();
+
+  TrainSummary summary;
+  summary.shapes.resize(num_jobs);
+  std::vector<std::vector<float>> sdf_values(num_jobs);
+  for (int i = 0; i < num_jobs; ++i) {
+    summary.shapes[i].name = jobs[i].name;
+    summary.shapes[i].file = jobs[i].relative_path;
+    if (jobs[i].skip) {
+      summary.shapes[i].reject_reason = "skipped by the manifest: " + jobs[i].skip_reason;
+      LogWarning() << "skipping " << jobs[i].relative_path << ": "
+                   << summary.shapes[i].reject_reason;
+    }
+  }
+
+  tbb::task_arena arena(options.num_threads > 0 ? options.num_threads
+                                                : int(tbb::task_arena::automatic));
+  Progress progress("scanning", num_jobs, options.show_progress);
+  arena.execute([&] {
+    tbb::parallel_for(0, num_jobs, 1, [&](int i) {
+      const Job& job = jobs[i];
+      TrainedShape& shape = summary.shapes[i];
+      if (job.skip) {
+        progress.Tick();
+        return;
+      }
+      const auto model_start = Clock::now();
+      try {
+        const Mesh cad_mesh = LoadMesh(job.path);
+        const CanonicalizeResult canonical = Canonicalize(cad_mesh, job.canonicalize);
+        for (const std::string& warning : canonical.warnings) {
+          LogWarning() << job.relative_path << ": " << warning;
+        }
+        shape.scale = canonical.scale;
+        shape.size = canonical.size;
+        const ScanResult scan = ScanMesh(canonical.mesh, options.scan);
+        SAMP_CHECK(scan.num_hits > 0) << "no scan ray hit the mesh";
+        Sdf sdf = ComputeSdf(canonical.mesh, scan, options.grid, options.sdf, /*parallel=*/true);
+        shape.inside_fraction = sdf.summary.inside_fraction;
+        SAMP_CHECK(sdf.summary.sign_ok)
+            << "sign carving failed: inside fraction " << sdf.summary.inside_fraction
+            << " below the minimum " << options.sdf.min_inside_fraction
+            << " (open or inverted mesh, or not a car?)";
+        SAMP_CHECK(int64_t(sdf.values.size()) == options.grid.NumVoxels())
+            << "SDF has " << sdf.values.size() << " values, expected "
+            << options.grid.NumVoxels();
+        if (!options.sdf_folder.empty()) {
+          std::string file_name = job.name + ".vdb";
+          SaveModelSdf((fs::path(options.sdf_folder) / file_name).string(), sdf, job, canonical);
+        }
+        sdf_values[i] = std::move(sdf.values);
+        shape.used = true;
+      } catch (const std::exception& e) {
+        shape.reject_reason = e.what();
+      } catch (...) {
+        shape.reject_reason = "unknown error";
+      }
+      shape.seconds = SecondsSince(model_start);
+      if (!shape.used) LogWarning() << "skipping " << job.relative_path << ": " << shape.reject_reason;
+      progress.Tick();
+    });
+  });
+  progress.Finish();
+
+  std::vector<int> used;
+  for (int i = 0; i < num_jobs; ++i) {
+    if (summary.shapes[i].used) used.push_back(i);
+  }
+  summary.num_used = int(used.size());
+  const int needed = options.pca.num_components + 1;
+  if (summary.num_used < needed) {
+    summary.seconds = SecondsSince(start);
+    LogInfo() << "\n" << summary.BriefReport();
+    SAMP_THROW() << "only " << summary.num_used << " of " << num_jobs
+                 << " models are usable; a model with R = " << options.pca.num_components
+                 << " components needs at least " << needed
+                 << " (see the 'skipping' lines above for the reasons)";
+  }
+
+  // PCA over the used models' SDFs (one column each, in file order).
+  const int64_t dim = options.grid.NumVoxels();
+  Eigen::MatrixXf samples(dim, summary.num_used);
+  for (int c = 0; c < summary.num_used; ++c) {
+    samples.col(c) = Eigen::Map<const Eigen::VectorXf>(sdf_values[used[c]].data(), dim);
+    std::vector<float>().swap(sdf_values[used[c]]);
+  }
+  PcaResult pca;
+  arena.execute([&] { pca = ComputePca(samples, options.pca); });
+
+  ShapeModel model;
+  model.grid = options.grid;
+  model.mean = std::move(pca.mean);
+  model.components = std::move(pca.components);
+  model.eigenvalues = pca.eigenvalues;
+  model.total_variance = pca.total_variance;
+  for (int i : used) model.training_shapes.push_back(summary.shapes[i].name);
+  model.options_json = options.ToJson();
+  model.Save(options.output_path);
+
+  summary.eigenvalues = pca.eigenvalues;
+  summary.explained_variance =
+      pca.total_variance > 0 ? pca.eigenvalues.sum() / pca.total_variance : 0.0;
+  summary.seconds = SecondsSince(start);
+  LogInfo() << "wrote " << options.output_path;
+  return summary;
+}
+
+}  // namespace samp

@@ -1,0 +1,185 @@
+#include "libsamp/model/trainer.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "libsamp/core/error.h"
+#include "libsamp/core/ply_io.h"
+#include "libsamp/scan/mesh_io.h"
+#include "libsamp/sdf/vdb_io.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+
+class TrainerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    root_ = fs::temp_directory_path() / ("samp_trainer_test_" + std::to_string(::getpid()));
+    fs::remove_all(root_);
+    cad_ = root_ / "cad";
+    fs::create_directories(cad_ / "sub");
+    // Car-sized shapes in a z-up CAD frame (x = length, y = width, z = height):
+    // four boxes and two ellipsoids of different proportions, as OBJ and PLY.
+    const double boxes[4][3] = {{4.2, 1.8, 1.5}, {4.8, 1.9, 1.4}, {3.8, 1.7, 1.6}, {4.5, 1.8, 1.3}};
+    for (int i = 0; i < 4; ++i) {
+      const Eigen::Vector3d half(boxes[i][0] / 2, boxes[i][1] / 2, boxes[i][2] / 2);
+      const Mesh box = MakeBoxMesh(-half, half);
+      const std::string name = "box" + std::to_string(i);
+      if (i % 2 == 0) {
+        ExportMesh((cad_ / (name + ".obj")).string(), box);
+      } else {
+        WritePly((cad_ / "sub" / (name + ".ply")).string(), box);
+      }
+    }
+    const double ellipsoids[2][3] = {{4.4, 1.8, 1.5}, {4.0, 1.75, 1.35}};
+    for (int i = 0; i < 2; ++i) {
+      Mesh ellipsoid = MakeSphereMesh(Eigen::Vector3d::Zero(), 1.0, 12, 24);
+      ellipsoid.Transform(Eigen::Affine3d(Eigen::Scaling(
+          ellipsoids[i][0] / 2, ellipsoids[i][1] / 2, ellipsoids[i][2] / 2)));
+      ExportMesh((cad_ / ("ellipsoid" + std::to_string(i) + ".obj")).string(), ellipsoid);
+    }
+    // A file assimp cannot read, one the manifest skips, and a non-mesh file.
+    std::ofstream(cad_ / "broken.obj") << "this is not\na mesh \x01\x02 v v f 1 2\n";
+    WritePly((cad_ / "sub" / "toy.ply").string(),
+             MakeBoxMesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.3, 0.2, 0.1)));
+    std::ofstream(cad_ / "README.txt") << "not a mesh\n";
+
+    manifest_ = (root_ / "manifest.json").string();
+    std::ofstream(manifest_) << R"({
+      "defaults": {"up": "+z", "forward": "+x"},
+      "models": [
+        {"file": "sub/toy.ply", "skip": true, "skip_reason": "a toy, not a car"},
+        {"file": "ellipsoid1.obj", "name": "egg", "target_length": 4.1}
+      ]
+    })";
+
+    options_.cad_folder = cad_.string();
+    options_.manifest_path = manifest_;
+    options_.output_path = (root_ / "out" / "model.vdb").string();
+    options_.sdf_folder = (root_ / "sdf").string();
+    options_.grid = GridSpec::CarDefault(0.2);
+    options_.scan.num_views = 20;
+    options_.scan.width = options_.scan.height = 64;
+    options_.pca.num_components = 3;
+    options_.show_progress = false;
+  }
+  void TearDown() override {
+    std::error_code ec;
+    fs::remove_all(root_, ec);
+  }
+
+  fs::path root_, cad_;
+  std::string manifest_;
+  TrainOptions options_;
+};
+
+const TrainedShape* FindShape(const TrainSummary& summary, const std::string& name) {
+  for (const TrainedShape& s : summary.shapes) {
+    if (s.name == name) return &s;
+  }
+  return nullptr;
+}
+
+TEST_F(TrainerTest, TrainsFromAFolderAndSkipsBadFiles) {
+  const TrainSummary summary = TrainShapeModel(options_);
+  ASSERT_EQ(summary.shapes.size(), 8u) << summary.BriefReport();
+  EXPECT_EQ(summary.num_used, 6) << summary.BriefReport();
+
+  const TrainedShape* broken = FindShape(summary, "broken");
+  ASSERT_NE(broken, nullptr);
+  EXPECT_FALSE(broken->used);
+  EXPECT_FALSE(broken->reject_reason.empty());
+  const TrainedShape* toy = FindShape(summary, "toy");
+  ASSERT_NE(toy, nullptr);
+  EXPECT_FALSE(toy->used);
+  EXPECT_NE(toy->reject_reason.find("a toy, not a car"), std::string::npos);
+  const TrainedShape* egg = FindShape(summary, "egg");
+  ASSERT_NE(egg, nullptr);
+  EXPECT_TRUE(egg->used) << egg->reject_reason;
+  EXPECT_NEAR(egg->size.x(), 4.1, 1e-6);  // manifest target_length
+  const TrainedShape* box1 = FindShape(summary, "box1");
+  ASSERT_NE(box1, nullptr);
+  EXPECT_TRUE(box1->used) << box1->reject_reason;
+  EXPECT_NEAR(box1->size.x(), 4.8, 1e-4);
+  EXPECT_NEAR(box1->size.y(), 1.4, 1e-4);  // height
+  EXPECT_NEAR(box1->size.z(), 1.9, 1e-4);  // width
+  EXPECT_GT(box1->inside_fraction, 0.05);
+
+  ASSERT_EQ(summary.eigenvalues.size(), 3);
+  EXPECT_GT(summary.eigenvalues[0], summary.eigenvalues[1]);
+  EXPECT_GT(summary.eigenvalues[2], 0.0);
+  EXPECT_GT(summary.explained_variance, 0.5);
+  EXPECT_LE(summary.explained_variance, 1.0 + 1e-9);
+  const std::string report = summary.BriefReport();
+  EXPECT_NE(report.find("broken"), std::string::npos) << report;
+  EXPECT_NE(report.find("explained variance"), std::string::npos) << report;
+
+  const ShapeModel model = ShapeModel::Load(options_.output_path);
+  EXPECT_EQ(model.NumComponents(), 3);
+  EXPECT_EQ(model.grid, options_.grid);
+  EXPECT_EQ(model.training_shapes.size(), 6u);
+  EXPECT_TRUE(model.eigenvalues.isApprox(summary.eigenvalues, 1e-12));
+  const nlohmann::json stored = nlohmann::json::parse(model.options_json);
+  EXPECT_EQ(stored["scan"]["num_views"], 20);
+  EXPECT_EQ(stored["pca"]["num_components"], 3);
+  // The mean shape is a car-sized blob around the origin's bottom centre.
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(3);
+  EXPECT_LT(model.Evaluate(zero, Eigen::Vector3d(0, -0.7, 0)), -0.3);
+  EXPECT_GT(model.Evaluate(zero, Eigen::Vector3d(2.8, -2.0, 1.2)), 0.3);
+
+  // One SDF file per used model, with its provenance.
+  int num_sdf_files = 0;
+  for (const auto& entry : fs::directory_iterator(options_.sdf_folder)) {
+    ++num_sdf_files;
+    GridSpec spec;
+    VdbMetadata meta;
+    const auto grids = ReadVdb(entry.path().string(), &spec, &meta);
+    ASSERT_EQ(grids.size(), 1u);
+    EXPECT_EQ(grids[0].name, "sdf");
+    EXPECT_EQ(spec, options_.grid);
+    EXPECT_EQ(meta["samp_file_type"], "sdf");
+    EXPECT_FALSE(meta["samp_source_file"].empty());
+  }
+  EXPECT_EQ(num_sdf_files, 6);
+}
+
+TEST_F(TrainerTest, FailsClearlyWithTooFewUsableModels) {
+  options_.pca.num_components = 6;  // needs 7 usable models, there are 6
+  try {
+    TrainShapeModel(options_);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("only 6 of 8 models are usable"), std::string::npos)
+        << e.what();
+  }
+  // Nothing half-written is left behind.
+  EXPECT_FALSE(fs::exists(options_.output_path));
+  if (fs::exists(fs::path(options_.output_path).parent_path())) {
+    EXPECT_TRUE(fs::is_empty(fs::path(options_.output_path).parent_path()));
+  }
+}
+
+TEST_F(TrainerTest, RejectsBadOptionsAndFolders) {
+  TrainOptions options = options_;
+  options.cad_folder = (root_ / "does_not_exist").string();
+  EXPECT_THROW(TrainShapeModel(options), Error);
+  options = options_;
+  options.output_path.clear();
+  EXPECT_THROW(TrainShapeModel(options), Error);
+  options = options_;
+  options.num_threads = -1;
+  EXPECT_THROW(TrainShapeModel(options), Error);
+  options = options_;
+  options.cad_folder = (root_ / "out_empty").string();
+  fs::create_directories(options.cad_folder);
+  EXPECT_THROW(TrainShapeModel(options), Error);
+}
+
+}  // namespace
+}  // namespace samp

@@ -1,0 +1,75 @@
+// `samp train`: a folder of CAD cars -> a PCA shape-manifold model file.
+#include <iostream>
+#include <memory>
+
+#include "libsamp/core/log.h"
+#include "libsamp/model/trainer.h"
+#include "tools/samp/commands.h"
+
+namespace samp::tools {
+
+void RegisterTrainCommand(CLI::App* app) {
+  struct Args {
+    TrainOptions options;
+    double voxel_size = 0.1;
+    int resolution = 400;
+  };
+  auto args = std::make_shared<Args>();
+  TrainOptions& o = args->options;
+  o.num_threads = 0;
+  CLI::App* command = app->add_subcommand(
+      "train",
+      "Train a shape manifold (PCA of signed distance fields) from a folder of CAD cars.\n"
+      "Each mesh file (any format assimp reads) is brought into the canonical object frame,\n"
+      "scanned with Embree from viewpoints on a sphere, turned into an SDF on the car grid;\n"
+      "models that fail are skipped with a reason. See docs/training.md.");
+  command->add_option("CAD_FOLDER", o.cad_folder,
+                      "Folder searched recursively for mesh files (other files are ignored)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  command->add_option("-o,--output", o.output_path,
+                      "The model file to write (.vdb, written atomically; docs/model_format.md)")
+      ->required();
+  command->add_option("--manifest", o.manifest_path,
+                      "JSON manifest: per file name, scale or target length, up/forward axes, "
+                      "skip (docs/canonical_frame.md); without it axes are auto-detected")
+      ->check(CLI::ExistingFile);
+  command->add_option("--sdf-dir", o.sdf_folder,
+                      "Also write each model's SDF as <name>.vdb into this folder");
+  command->add_option("-R,--components", o.pca.num_components,
+                      "Number of principal components R (needs >= R + 1 usable models)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--voxel", args->voxel_size,
+                      "Voxel size in metres of the car grid (a 6.0 x 2.8 x 2.8 m box around the "
+                      "canonical car)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--views", o.scan.num_views,
+                      "Number of scan viewpoints per model (Fibonacci sphere)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--resolution", args->resolution,
+                      "Width and height in pixels (rays) of each scan view")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--min-inside", o.sdf.min_inside_fraction,
+                      "Reject a model whose SDF has a smaller inside (negative) fraction of the grid")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  command->add_option("--threads", o.num_threads, "Worker threads (0 = all cores)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  AddCommonOptions(command);
+  command->callback([args] {
+    TrainOptions options = args->options;
+    options.grid = GridSpec::CarDefault(args->voxel_size);
+    options.scan.width = options.scan.height = args->resolution;
+    options.show_progress = GetLogLevel() <= LogLevel::kInfo;
+    const TrainSummary summary = TrainShapeModel(options);
+    std::cout << summary.BriefReport();
+    std::cout << "wrote " << options.output_path << std::endl;
+  });
+}
+
+}  // namespace samp::tools
