@@ -10,4 +10,6 @@ namespace samp::tools {
 // Adds the options shared by every subcommand (--verbose, --quiet, --threads).
 void AddCommonOptions(CLI::App* command);
 
+void RegisterTrainCommand(CLI::App* app);
+
 }  // namespace samp::tools

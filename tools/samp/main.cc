@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "samp 0.1.0");
   app.require_subcommand(1);
   // Subcommands (each in its own *_command.cc):
+  samp::tools::RegisterTrainCommand(&app);
 
   try {
     app.parse(argc, argv);
