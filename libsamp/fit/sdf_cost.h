@@ -1,0 +1,59 @@
+// SDF data term of one frame of a track (SAMP Section 3.2), ONE Ceres cost
+// block per frame with analytic Jacobians.
+//
+// For the N observed points x_i (world) with depth noise sigma_i, the pose
+// (t, theta) and the shape code z:
+//   s_i = phi_z(R_y(theta)^T (x_i - t)) / sigma_i
+//   E_data = w / N * sum_i rho(s_i),   rho = Huber with threshold k:
+//            rho(s) = s^2 (|s| <= k),  2 k |s| - k^2 (|s| > k)
+// Ceres applies a LossFunction to a whole block, so the robustifier lives
+// inside the block: residual r_i = sqrt(w / N) psi(s_i) with
+//   psi(s) = s (|s| <= k),  sign(s) sqrt(2 k |s| - k^2) (|s| > k),
+// hence sum_i r_i^2 = E_data exactly; psi is C^1 (psi' = k / |psi| outside).
+// w = 1 / T weights a frame of a T-frame track. phi_z is the trilinear
+// lookup of ShapeLookup (outside the grid: value grows with the distance to
+// the grid box, gradient points back). Jacobians:
+//   d r_i / d z     = sqrt(w/N) psi'(s_i) / sigma_i * d phi / d z  (trilinear weights on W)
+//   d r_i / d t     = -sqrt(w/N) psi'(s_i) / sigma_i * (R grad phi)^T
+//   d r_i / d theta =  sqrt(w/N) psi'(s_i) / sigma_i * grad phi . (-o_z, 0, o_x)
+// where o = the point in the object frame.
+// Parameter blocks: z (R values), pose (tx, ty, tz, theta).
+#pragma once
+
+#include <ceres/cost_function.h>
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "libsamp/fit/shape_lookup.h"
+
+namespace samp {
+
+class SdfCost : public ceres::CostFunction {
+ public:
+  // `lookup` must outlive the cost. points and sigmas have equal, non-zero size.
+  SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
+          const std::vector<double>& sigmas, double huber_threshold, double weight);
+
+  static ceres::CostFunction* Create(const ShapeLookup* lookup,
+                                     const std::vector<Eigen::Vector3d>& points_in_world,
+                                     const std::vector<double>& sigmas, double huber_threshold,
+                                     double weight) {
+    return new SdfCost(lookup, points_in_world, sigmas, huber_threshold, weight);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+  // The Huber robustifier psi and its derivative (exposed for tests).
+  static double Psi(double s, double k, double* d_psi);
+
+ private:
+  const ShapeLookup* lookup_;
+  std::vector<double> points_;  // 3 per point
+  std::vector<double> inv_sigmas_;  // 1 / sigma_i
+  double huber_ = 1.0;
+  double sqrt_weight_ = 1.0;    // sqrt(w / N)
+};
+
+}  // namespace samp

@@ -1,0 +1,279 @@
+// Residuals and analytic Jacobians of the fitter's cost functions, checked
+// against numeric differentiation (central differences) and direct formulas.
+#include <ceres/cost_function.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+#include <sstream>
+
+#include "libsamp/core/error.h"
+#include "libsamp/fit/ground_cost.h"
+#include "libsamp/fit/motion_cost.h"
+#include "libsamp/fit/sdf_cost.h"
+#include "libsamp/fit/shape_lookup.h"
+#include "libsamp/fit/shape_prior_cost.h"
+#include "tests/fit/fit_test_util.h"
+
+namespace samp {
+namespace {
+
+const ShapeModel& Model() {
+  static const ShapeModel model = testing::MakeSyntheticModel(5, 0.1);
+  return model;
+}
+const ShapeLookup& Lookup() {
+  static const ShapeLookup lookup(Model());
+  return lookup;
+}
+
+// Analytic Jacobians vs central differences (step 1e-6, absolute), entry by
+// entry: |analytic - numeric| <= tolerance * max(1, |numeric|). (Own central
+// differences rather than ceres::GradientChecker, whose relative step is
+// scaled by |x| and so too coarse for world coordinates of ~15 m on a 0.1 m
+// piecewise-trilinear field.)
+void ExpectJacobiansMatch(const ceres::CostFunction& cost, std::vector<double*> params,
+                          double tolerance, const std::string& what) {
+  const int num_residuals = cost.num_residuals();
+  const std::vector<int32_t>& sizes = cost.parameter_block_sizes();
+  ASSERT_EQ(sizes.size(), params.size());
+  std::vector<std::vector<double>> jacobians(sizes.size());
+  std::vector<double*> jacobian_ptrs(sizes.size());
+  for (size_t b = 0; b < sizes.size(); ++b) {
+    jacobians[b].assign(size_t(num_residuals) * sizes[b], 0.0);
+    jacobian_ptrs[b] = jacobians[b].data();
+  }
+  std::vector<double> r0(num_residuals), rp(num_residuals), rm(num_residuals);
+  ASSERT_TRUE(cost.Evaluate(params.data(), r0.data(), jacobian_ptrs.data())) << what;
+  int bad = 0;
+  double worst = 0.0;
+  std::ostringstream log;
+  for (size_t b = 0; b < sizes.size(); ++b) {
+    for (int k = 0; k < sizes[b]; ++k) {
+      const double h = 1e-6, saved = params[b][k];
+      params[b][k] = saved + h;
+      ASSERT_TRUE(cost.Evaluate(params.data(), rp.data(), nullptr));
+      params[b][k] = saved - h;
+      ASSERT_TRUE(cost.Evaluate(params.data(), rm.data(), nullptr));
+      params[b][k] = saved;
+      for (int i = 0; i < num_residuals; ++i) {
+        const double numeric = (rp[i] - rm[i]) / (2 * h);
+        const double analytic = jacobians[b][size_t(i) * sizes[b] + k];
+        const double error = std::abs(analytic - numeric) / std::max(1.0, std::abs(numeric));
+        worst = std::max(worst, error);
+        if (error > tolerance) {
+          if (bad < 5) log << " block " << b << " row " << i << " col " << k << ": " << analytic << " vs " << numeric << "\n";
+          ++bad;
+        }
+      }
+    }
+  }
+  EXPECT_EQ(bad, 0) << what << ": worst error " << worst << "\n" << log.str();
+}
+
+TEST(ShapeLookup, MatchesDirectTrilinearInterpolation) {
+  const ShapeLookup& lookup = Lookup();
+  const ShapeModel& model = Model();
+  std::mt19937 rng(1);
+  std::normal_distribution<double> n(0.0, 1.0);
+  Eigen::VectorXd z(5);
+  for (int r = 0; r < 5; ++r) z[r] = n(rng) * std::sqrt(model.eigenvalues[r]);
+  const Eigen::VectorXf phi = model.mean + model.components * z.cast<float>();
+  // At grid samples the lookup returns the sample.
+  for (auto ijk : {Eigen::Vector3i(3, 4, 5), Eigen::Vector3i(30, 14, 14), Eigen::Vector3i(59, 27, 27)}) {
+    const Eigen::Vector3d p = model.grid.Position(ijk.x(), ijk.y(), ijk.z());
+    EXPECT_NEAR(lookup.Evaluate(z, p), phi[model.grid.Index(ijk.x(), ijk.y(), ijk.z())], 1e-5);
+  }
+  // Midpoint of a cell = mean of its 8 corners.
+  const Eigen::Vector3d mid = model.grid.Position(10, 10, 10) + Eigen::Vector3d::Constant(0.05);
+  double mean = 0;
+  for (int c = 0; c < 8; ++c) mean += phi[model.grid.Index(10 + (c & 1), 10 + ((c >> 1) & 1), 10 + (c >> 2))];
+  EXPECT_NEAR(lookup.Evaluate(z, mid), mean / 8, 1e-5);
+  // Dense agrees with the model.
+  const std::vector<float> dense = lookup.Dense(z);
+  for (int64_t v = 0; v < model.grid.NumVoxels(); v += 997) EXPECT_NEAR(dense[v], phi[v], 1e-5);
+}
+
+TEST(ShapeLookup, OutsideGridPointsBack) {
+  const ShapeLookup& lookup = Lookup();
+  const Eigen::VectorXd z = Eigen::VectorXd::Zero(5);
+  const Eigen::Vector3d corner = lookup.grid().MaxCorner();
+  const Eigen::Vector3d inside_point = corner - Eigen::Vector3d(0.0, 0.5, 0.5);
+  const Eigen::Vector3d outside_point = inside_point + Eigen::Vector3d(2.0, 0, 0);
+  Eigen::Vector3d g;
+  Eigen::VectorXd gz;
+  const double border = lookup.Evaluate(z, inside_point);
+  const double value = lookup.Evaluate(z, outside_point, &g, &gz);
+  EXPECT_NEAR(value, border + 2.0, 1e-9);
+  EXPECT_NEAR(g.x(), 1.0, 1e-12);  // -gradient points back into the grid
+  EXPECT_GT(g.norm(), 0.5);
+  // Far outside along a diagonal: value grows with the distance to the box.
+  const Eigen::Vector3d far = corner + Eigen::Vector3d(3.0, 4.0, 0.0);
+  const double far_value = lookup.Evaluate(z, far, &g, &gz);
+  EXPECT_NEAR(far_value, lookup.Evaluate(z, corner) + 5.0, 1e-9);
+  EXPECT_NEAR(g.x(), 0.6, 1e-9);
+  EXPECT_NEAR(g.y(), 0.8, 1e-9);
+  // Non-finite point: NaN, no crash.
+  EXPECT_TRUE(std::isnan(lookup.Evaluate(z, Eigen::Vector3d(NAN, 0, 0))));
+}
+
+TEST(ShapeLookup, GradientsMatchCentralDifferences) {
+  const ShapeLookup& lookup = Lookup();
+  std::mt19937 rng(2);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::VectorXd z(5);
+    for (int r = 0; r < 5; ++r) z[r] = u(rng) * lookup.sigmas()[r];
+    // Half the points outside the grid box.
+    const Eigen::Vector3d p(u(rng) * 4.5, -0.9 + u(rng) * 2.5, u(rng) * 2.5);
+    Eigen::Vector3d g;
+    Eigen::VectorXd gz;
+    lookup.Evaluate(z, p, &g, &gz);
+    const double h = 1e-7;
+    for (int a = 0; a < 3; ++a) {
+      Eigen::Vector3d d = Eigen::Vector3d::Zero();
+      d[a] = h;
+      const double num = (lookup.Evaluate(z, p + d) - lookup.Evaluate(z, p - d)) / (2 * h);
+      EXPECT_NEAR(g[a], num, 1e-5) << "point " << p.transpose() << " axis " << a;
+    }
+    for (int r = 0; r < 5; ++r) {
+      Eigen::VectorXd d = Eigen::VectorXd::Zero(5);
+      d[r] = h;
+      const double num = (lookup.Evaluate(z + d, p) - lookup.Evaluate(z - d, p)) / (2 * h);
+      EXPECT_NEAR(gz[r], num, 1e-5);
+    }
+  }
+}
+
+TEST(SdfCost, HuberPsi) {
+  double d;
+  EXPECT_DOUBLE_EQ(SdfCost::Psi(0.5, 1.0, &d), 0.5);
+  EXPECT_DOUBLE_EQ(d, 1.0);
+  // psi^2 = 2 k |s| - k^2 outside.
+  EXPECT_NEAR(SdfCost::Psi(3.0, 1.0, &d), std::sqrt(5.0), 1e-15);
+  EXPECT_NEAR(d, 1.0 / std::sqrt(5.0), 1e-15);
+  EXPECT_NEAR(SdfCost::Psi(-3.0, 1.0, &d), -std::sqrt(5.0), 1e-15);
+  // C^1 at the threshold.
+  double d1, d2;
+  EXPECT_NEAR(SdfCost::Psi(1.0 - 1e-9, 1.0, &d1), SdfCost::Psi(1.0 + 1e-9, 1.0, &d2), 1e-8);
+  EXPECT_NEAR(d1, d2, 1e-8);
+}
+
+struct SdfCase {
+  double yaw;
+  double huber;
+  double offset;  // pushes points away from the surface / out of the grid
+};
+
+TEST(SdfCost, ResidualAndJacobians) {
+  const ShapeLookup& lookup = Lookup();
+  std::mt19937 rng(3);
+  const Eigen::VectorXd z_true = 0.5 * lookup.sigmas();
+  const std::vector<Eigen::Vector3d> surface = testing::SampleSurface(lookup, z_true, 60, &rng);
+  ASSERT_EQ(surface.size(), 60u);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const SdfCase cases[] = {{0.3, 1.0, 0.05},       {M_PI - 1e-6, 1.0, 0.1}, {-M_PI + 1e-6, 0.5, 0.2},
+                           {-1.4, 0.2, 0.3},        {M_PI, 1.0, 3.0},        {2.0, 1.0, 5.0}};
+  for (const SdfCase& c : cases) {
+    const Eigen::Vector3d t(4.0, 1.6, 15.0);
+    const Eigen::Isometry3d world_from_object = WorldFromObject(t, c.yaw);
+    std::vector<Eigen::Vector3d> points;
+    std::vector<double> sigmas;
+    for (const auto& p : surface) {
+      const Eigen::Vector3d noise(n(rng), n(rng), n(rng));
+      points.push_back(world_from_object * (p + c.offset * noise));
+      sigmas.push_back(0.1 + 0.05 * std::abs(n(rng)));
+    }
+    const double weight = 1.0 / 7.0;
+    SdfCost cost(&lookup, points, sigmas, c.huber, weight);
+    Eigen::VectorXd z = 0.3 * lookup.sigmas();
+    double pose[4] = {t.x() + 0.05, t.y() - 0.02, t.z() + 0.03, c.yaw + 0.01};
+    // Residuals agree with the definition.
+    std::vector<double> residuals(points.size());
+    const double* params[2] = {z.data(), pose};
+    ASSERT_TRUE(cost.Evaluate(params, residuals.data(), nullptr));
+    double energy = 0, expected = 0;
+    int outside = 0;
+    const Eigen::Isometry3d object_from_world =
+        ObjectFromWorld(Eigen::Vector3d(pose[0], pose[1], pose[2]), pose[3]);
+    for (size_t i = 0; i < points.size(); ++i) {
+      energy += residuals[i] * residuals[i];
+      const Eigen::Vector3d o = object_from_world * points[i];
+      const Eigen::Vector3d lo = lookup.grid().MinCorner(), hi = lookup.grid().MaxCorner();
+      outside += ((o.array() < lo.array()) || (o.array() > hi.array())).any();
+      const double s = lookup.Evaluate(z, o) / sigmas[i];
+      const double rho = std::abs(s) <= c.huber ? s * s : 2 * c.huber * std::abs(s) - c.huber * c.huber;
+      expected += weight / points.size() * rho;
+    }
+    EXPECT_NEAR(energy, expected, 1e-9 * std::max(1.0, expected));
+    if (c.offset >= 3.0) {
+      EXPECT_GT(outside, 10) << "case must exercise points outside the grid";
+    }
+    ExpectJacobiansMatch(cost, {z.data(), pose}, 1e-6,
+                         "yaw " + std::to_string(c.yaw) + " offset " + std::to_string(c.offset));
+  }
+}
+
+TEST(SdfCost, RejectsBadInput) {
+  const ShapeLookup& lookup = Lookup();
+  EXPECT_THROW(SdfCost(&lookup, {}, {}, 1.0, 1.0), Error);
+  EXPECT_THROW(SdfCost(&lookup, {Eigen::Vector3d(0, 0, 1)}, {0.0}, 1.0, 1.0), Error);
+  EXPECT_THROW(SdfCost(&lookup, {Eigen::Vector3d(NAN, 0, 1)}, {0.1}, 1.0, 1.0), Error);
+}
+
+TEST(MotionCost, ResidualWrapsYawAndJacobiansMatch) {
+  MotionNoise noise;
+  const MotionModel models[] = {MotionModel::kStanding, MotionModel::kStraight, MotionModel::kArc};
+  for (MotionModel model : models) {
+    for (double omega : {0.0, 1e-8, 0.35}) {
+      double prev_pose[4] = {2.0, 1.6, 20.0, M_PI - 0.01}, prev_vel[2] = {6.0, omega};
+      double pred[6];
+      PredictMotion(model, prev_pose, prev_vel, 0.1, pred, nullptr, nullptr);
+      // Current yaw on the other side of +-pi: the wrapped difference is small.
+      double pose[4] = {pred[0] + 0.1, pred[1], pred[2] - 0.05, WrapAngle(pred[3] + 0.02)};
+      double vel[2] = {pred[4] + 0.3, pred[5] - 0.01};
+      const auto sigma = MotionCovariance(model, prev_pose, prev_vel, 0.1, noise);
+      const auto l = SqrtInformation(sigma);
+      MotionCost cost(model, 0.1, l, 0.25);
+      double r[6];
+      const double* params[4] = {prev_pose, prev_vel, pose, vel};
+      ASSERT_TRUE(cost.Evaluate(params, r, nullptr));
+      Eigen::Matrix<double, 6, 1> e;
+      e << 0.1, 0.0, -0.05, 0.02, 0.3, -0.01;
+      const Eigen::Matrix<double, 6, 1> expected = 0.5 * l * e;
+      for (int k = 0; k < 6; ++k) EXPECT_NEAR(r[k], expected[k], 1e-9) << MotionModelName(model);
+      ExpectJacobiansMatch(cost, {prev_pose, prev_vel, pose, vel}, 1e-6,
+                           std::string("motion ") + MotionModelName(model));
+    }
+  }
+}
+
+TEST(GroundCost, ResidualAndJacobian) {
+  const Eigen::Vector4d plane = Eigen::Vector4d(0.02, -0.999, 0.03, 1.7).normalized();
+  const Eigen::Vector4d unit_plane = plane / plane.head<3>().norm();
+  GroundCost cost(unit_plane, 0.1, 0.5);
+  double pose[4] = {1.0, 1.2, 10.0, 0.4};
+  double r;
+  const double* params[1] = {pose};
+  ASSERT_TRUE(cost.Evaluate(params, &r, nullptr));
+  const double height = unit_plane.head<3>().dot(Eigen::Vector3d(1.0, 1.2, 10.0)) + unit_plane[3];
+  EXPECT_NEAR(r, std::sqrt(0.5) * height / 0.1, 1e-12);
+  ExpectJacobiansMatch(cost, {pose}, 1e-7, "ground");
+}
+
+TEST(ShapePriorCost, ResidualAndJacobian) {
+  const Eigen::VectorXd sigmas = Eigen::Vector3d(2.0, 1.0, 0.5);
+  ShapePriorCost cost(sigmas, 4.0);
+  double z[3] = {1.0, -1.0, 0.25};
+  double r[3];
+  const double* params[1] = {z};
+  ASSERT_TRUE(cost.Evaluate(params, r, nullptr));
+  EXPECT_NEAR(r[0], 1.0, 1e-15);
+  EXPECT_NEAR(r[1], -2.0, 1e-15);
+  EXPECT_NEAR(r[2], 1.0, 1e-15);
+  ExpectJacobiansMatch(cost, {z}, 1e-7, "shape prior");
+}
+
+}  // namespace
+}  // namespace samp
