@@ -1,0 +1,444 @@
+#include "libsamp/fit/fitter.h"
+
+#include <ceres/ceres.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "libsamp/core/error.h"
+#include "libsamp/core/log.h"
+#include "libsamp/fit/ground_cost.h"
+#include "libsamp/fit/motion_cost.h"
+#include "libsamp/fit/sdf_cost.h"
+#include "libsamp/fit/shape_prior_cost.h"
+
+namespace samp {
+
+namespace {
+
+double Seconds(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const size_t mid = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + mid, values.end());
+  double m = values[mid];
+  if (values.size() % 2 == 0) {
+    m = 0.5 * (m + *std::max_element(values.begin(), values.begin() + mid));
+  }
+  return m;
+}
+
+std::string Upper(std::string s) {
+  for (char& c : s) c = char(std::toupper(static_cast<unsigned char>(c)));
+  return s;
+}
+
+// Bottom centre of the detection projected onto the road plane (world).
+Eigen::Vector3d DetectionOnGround(const TrackFrame& f) {
+  const Eigen::Vector3d p = f.world_from_camera * f.detection.position;
+  const Eigen::Vector3d n = f.ground_plane_in_world.head<3>();
+  return p - (n.dot(p) + f.ground_plane_in_world[3]) * n;
+}
+
+double DetectionYaw(const TrackFrame& f) {
+  return YawOfDirection(f.world_from_camera.linear() * Heading(f.detection.rotation_y));
+}
+
+// Yaw flipped by pi when it points away (more than 90 degrees) from `reference`.
+double AlignYaw(double yaw, double reference) {
+  return std::abs(WrapAngle(yaw - reference)) > M_PI / 2 ? WrapAngle(yaw + M_PI) : WrapAngle(yaw);
+}
+
+// Data of one frame: the associated points and their sigmas.
+struct Association {
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> sigmas;
+};
+
+Association AssociateByDetection(const TrackFrame& f, double radius) {
+  Association a;
+  const Eigen::Vector3d centre =
+      f.world_from_camera *
+      (f.detection.position - Eigen::Vector3d(0.0, 0.5 * f.detection.height, 0.0));
+  for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
+    if ((f.candidate_points_in_world[i] - centre).norm() <= radius) {
+      a.points.push_back(f.candidate_points_in_world[i]);
+      a.sigmas.push_back(f.candidate_sigmas[i]);
+    }
+  }
+  return a;
+}
+
+Association AssociateByFit(const TrackFrame& f, const ShapeLookup& lookup, const Eigen::VectorXd& z,
+                           const Eigen::Vector4d& pose, const AlignedBox& box,
+                           const FitOptions& options) {
+  Association a;
+  const Eigen::Isometry3d object_from_world = ObjectFromWorld(pose.head<3>(), pose[3]);
+  const Eigen::Vector3d lo = box.min - Eigen::Vector3d::Constant(options.em_box_margin);
+  const Eigen::Vector3d hi = box.max + Eigen::Vector3d::Constant(options.em_box_margin);
+  for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
+    const Eigen::Vector3d o = object_from_world * f.candidate_points_in_world[i];
+    if ((o.array() < lo.array()).any() || (o.array() > hi.array()).any()) continue;
+    if (std::abs(lookup.Evaluate(z.data(), o.data(), nullptr, nullptr)) >= options.em_distance_threshold) {
+      continue;
+    }
+    a.points.push_back(f.candidate_points_in_world[i]);
+    a.sigmas.push_back(f.candidate_sigmas[i]);
+  }
+  return a;
+}
+
+void CheckTrack(const Track& track, const FitOptions& options) {
+  const std::string name = "track " + std::to_string(track.id) +
+                           (track.sequence.empty() ? "" : " of sequence " + track.sequence);
+  SAMP_CHECK(!track.frames.empty()) << name << " has no frames";
+  SAMP_CHECK(options.single_frame || track.frames.size() >= 2)
+      << name << " has only one frame (the joint fit needs >= 2; use single-frame mode)";
+  for (size_t k = 0; k < track.frames.size(); ++k) {
+    const TrackFrame& f = track.frames[k];
+    SAMP_CHECK(f.candidate_points_in_world.size() == f.candidate_sigmas.size())
+        << name << " frame " << f.frame << ": " << f.candidate_points_in_world.size()
+        << " points but " << f.candidate_sigmas.size() << " sigmas";
+    SAMP_CHECK(std::isfinite(f.time)) << name << " frame " << f.frame << ": time is not finite";
+    SAMP_CHECK(f.detection.position.allFinite() && std::isfinite(f.detection.rotation_y))
+        << name << " frame " << f.frame << ": detection is not finite";
+    SAMP_CHECK(f.world_from_camera.matrix().allFinite())
+        << name << " frame " << f.frame << ": ego pose is not finite";
+    SAMP_CHECK(f.ground_plane_in_world.allFinite() &&
+               std::abs(f.ground_plane_in_world.head<3>().norm() - 1.0) < 1e-3)
+        << name << " frame " << f.frame << ": ground plane must be finite with a unit normal";
+    for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
+      SAMP_CHECK(f.candidate_points_in_world[i].allFinite() && f.candidate_sigmas[i] > 0.0 &&
+                 std::isfinite(f.candidate_sigmas[i]))
+          << name << " frame " << f.frame << ": point " << i << " or its sigma is invalid";
+    }
+    if (k > 0) {
+      SAMP_CHECK(f.time > track.frames[k - 1].time)
+          << name << ": frame times must increase (frame " << f.frame << ")";
+    }
+  }
+}
+
+}  // namespace
+
+bool FitOptions::Check() const {
+  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  SAMP_CHECK(em_iterations >= 0) << "FitOptions.em_iterations must be >= 0, got " << em_iterations;
+  SAMP_CHECK(std::isfinite(em_initial_sigma_scale) && em_initial_sigma_scale >= 1.0)
+      << "FitOptions.em_initial_sigma_scale must be >= 1, got " << em_initial_sigma_scale;
+  SAMP_CHECK(positive(association_radius)) << "FitOptions.association_radius must be > 0";
+  SAMP_CHECK(positive(em_distance_threshold)) << "FitOptions.em_distance_threshold must be > 0";
+  SAMP_CHECK(std::isfinite(em_box_margin) && em_box_margin >= 0.0)
+      << "FitOptions.em_box_margin must be >= 0";
+  SAMP_CHECK(min_points_per_frame >= 1) << "FitOptions.min_points_per_frame must be >= 1";
+  SAMP_CHECK(positive(huber_threshold)) << "FitOptions.huber_threshold must be > 0";
+  SAMP_CHECK(positive(sigma_ground)) << "FitOptions.sigma_ground must be > 0";
+  SAMP_CHECK(std::isfinite(shape_prior_weight) && shape_prior_weight >= 0.0)
+      << "FitOptions.shape_prior_weight must be >= 0";
+  SAMP_CHECK(std::isfinite(standing_speed) && standing_speed >= 0.0)
+      << "FitOptions.standing_speed must be >= 0";
+  SAMP_CHECK(std::isfinite(straight_yaw_rate) && straight_yaw_rate >= 0.0)
+      << "FitOptions.straight_yaw_rate must be >= 0";
+  motion_noise.Check();
+  SAMP_CHECK(max_iterations >= 1) << "FitOptions.max_iterations must be >= 1";
+  SAMP_CHECK(function_tolerance >= 0 && gradient_tolerance >= 0 && parameter_tolerance >= 0)
+      << "FitOptions tolerances must be >= 0";
+  ceres::LinearSolverType type;
+  SAMP_CHECK(ceres::StringToLinearSolverType(Upper(linear_solver), &type))
+      << "FitOptions.linear_solver: unknown solver '" << linear_solver << "'";
+  SAMP_CHECK(type != ceres::DENSE_NORMAL_CHOLESKY && type != ceres::CGNR)
+      << "FitOptions.linear_solver: use sparse_normal_cholesky, dense_schur, iterative_schur or "
+         "dense_qr, not '"
+      << linear_solver << "'";
+  SAMP_CHECK(num_threads >= 1) << "FitOptions.num_threads must be >= 1";
+  return true;
+}
+
+std::string FitSummary::BriefReport() const {
+  std::ostringstream s;
+  s << solves.size() << " solve(s), " << num_iterations << " LM iterations, cost "
+    << initial_cost << " -> " << final_cost << ", " << seconds * 1e3 << " ms"
+    << (usable ? "" : " [NOT USABLE]");
+  if (!solves.empty()) s << ", last: " << solves.back().termination;
+  return s.str();
+}
+
+Eigen::Isometry3d FrameFit::WorldFromObject() const { return samp::WorldFromObject(position, yaw); }
+
+InitialState InitializeTrack(const Track& track, const FitOptions& options) {
+  const int num_frames = int(track.frames.size());
+  InitialState init;
+  init.poses.resize(num_frames);
+  init.velocities.assign(num_frames, Eigen::Vector2d::Zero());
+  std::vector<Eigen::Vector3d> positions(num_frames);
+  std::vector<double> detection_yaws(num_frames);
+  for (int k = 0; k < num_frames; ++k) {
+    positions[k] = DetectionOnGround(track.frames[k]);
+    detection_yaws[k] = DetectionYaw(track.frames[k]);
+  }
+  // Median over all pairs of detections (i < j) of the along-road
+  // displacement over the time between them: successive pairs alone are
+  // dominated by detection noise at 10 Hz (0.3 m of noise is 3 m/s), longer
+  // baselines are not; for a constant velocity every pair measures v.
+  std::vector<double> speeds;
+  for (int i = 0; i < num_frames; ++i) {
+    for (int j = i + 1; j < num_frames; ++j) {
+      const double dt = track.frames[j].time - track.frames[i].time;
+      Eigen::Vector3d d = positions[j] - positions[i];
+      const Eigen::Vector3d n = track.frames[i].ground_plane_in_world.head<3>();
+      d -= n.dot(d) * n;  // along the road
+      speeds.push_back(d.norm() / dt);
+    }
+  }
+  const double speed = Median(speeds);
+  init.standing = num_frames < 2 || speed < options.standing_speed;
+  // Reference orientation.
+  double reference;
+  if (init.standing) {
+    // Axis by the doubled-angle mean, direction by the majority of detections.
+    double sx = 0, sy = 0;
+    for (double y : detection_yaws) {
+      sx += std::cos(2 * y);
+      sy += std::sin(2 * y);
+    }
+    reference = 0.5 * std::atan2(sy, sx);
+    int agree = 0;
+    for (double y : detection_yaws) agree += std::abs(WrapAngle(y - reference)) <= M_PI / 2 ? 1 : -1;
+    if (agree < 0) reference = WrapAngle(reference + M_PI);
+  } else {
+    reference = YawOfDirection(positions.back() - positions.front());
+  }
+  std::vector<double> aligned(num_frames);
+  for (int k = 0; k < num_frames; ++k) aligned[k] = AlignYaw(detection_yaws[k], reference);
+  double yaw_rate = 0.0;
+  if (!init.standing) {
+    std::vector<double> rates;
+    for (int i = 0; i < num_frames; ++i) {
+      for (int j = i + 1; j < num_frames; ++j) {
+        const double dt = track.frames[j].time - track.frames[i].time;
+        rates.push_back(WrapAngle(aligned[j] - aligned[i]) / dt);
+      }
+    }
+    yaw_rate = Median(rates);
+  }
+  // Moving: on a circular arc the chord's direction is the heading at the
+  // middle time, so yaw_k = segment yaw + omega (time_k - middle time).
+  const double middle = 0.5 * (track.frames.front().time + track.frames.back().time);
+  for (int k = 0; k < num_frames; ++k) {
+    const double yaw =
+        init.standing ? aligned[k] : WrapAngle(reference + yaw_rate * (track.frames[k].time - middle));
+    init.poses[k] << positions[k], yaw;
+    init.velocities[k] = init.standing ? Eigen::Vector2d::Zero() : Eigen::Vector2d(speed, yaw_rate);
+  }
+  return init;
+}
+
+TrackFitter::TrackFitter(const ShapeModel& model, const FitOptions& options)
+    : lookup_(model), options_(options) {
+  options_.Check();
+}
+
+namespace {
+
+struct FitState {
+  std::vector<Eigen::VectorXd> codes;  // 1 (joint) or T (single frame)
+  std::vector<Eigen::Vector4d> poses;
+  std::vector<Eigen::Vector2d> velocities;
+  std::vector<std::string> models;
+};
+
+SolveReport Solve(const ShapeLookup& lookup, const Track& track,
+                  const std::vector<Association>& data, double sigma_scale,
+                  const FitOptions& options, FitState* state) {
+  const int num_frames = int(track.frames.size());
+  const bool single = options.single_frame;
+  const double frame_weight = 1.0 / num_frames;
+  ceres::Problem::Options problem_options;
+  problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
+  ceres::Problem problem(problem_options);
+  SolveReport report;
+  for (int c = 0; c < int(state->codes.size()); ++c) {
+    problem.AddParameterBlock(state->codes[c].data(), lookup.num_components());
+    if (options.shape_prior_weight > 0.0) {
+      problem.AddResidualBlock(
+          ShapePriorCost::Create(lookup.sigmas(), options.shape_prior_weight * (single ? frame_weight : 1.0)),
+          nullptr, state->codes[c].data());
+    }
+  }
+  for (int k = 0; k < num_frames; ++k) {
+    const TrackFrame& f = track.frames[k];
+    double* z = state->codes[single ? k : 0].data();
+    double* pose = state->poses[k].data();
+    problem.AddParameterBlock(pose, 4);
+    if (int(data[k].points.size()) >= options.min_points_per_frame) {
+      std::vector<double> sigmas = data[k].sigmas;
+      for (double& s : sigmas) s *= sigma_scale;
+      problem.AddResidualBlock(
+          SdfCost::Create(&lookup, data[k].points, sigmas, options.huber_threshold, frame_weight),
+          nullptr, z, pose);
+      report.num_points += int(data[k].points.size());
+    }
+    problem.AddResidualBlock(GroundCost::Create(f.ground_plane_in_world, options.sigma_ground, frame_weight),
+                             nullptr, pose);
+    if (single) continue;
+    problem.AddParameterBlock(state->velocities[k].data(), 2);
+    if (k == 0) {
+      state->models[k] = "none";
+      continue;
+    }
+    const double dt = f.time - track.frames[k - 1].time;
+    double* prev_pose = state->poses[k - 1].data();
+    double* prev_vel = state->velocities[k - 1].data();
+    const MotionModel model = SelectMotionModel(prev_vel[0], prev_vel[1], options.standing_speed,
+                                                options.straight_yaw_rate);
+    state->models[k] = MotionModelName(model);
+    const auto sigma = MotionCovariance(model, prev_pose, prev_vel, dt, options.motion_noise);
+    problem.AddResidualBlock(MotionCost::Create(model, dt, SqrtInformation(sigma), frame_weight), nullptr,
+                             prev_pose, prev_vel, pose, state->velocities[k].data());
+  }
+  ceres::Solver::Options solver_options;
+  solver_options.minimizer_type = ceres::TRUST_REGION;
+  solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  SAMP_CHECK(ceres::StringToLinearSolverType(Upper(options.linear_solver), &solver_options.linear_solver_type))
+      << "unknown linear solver " << options.linear_solver;
+  solver_options.max_num_iterations = options.max_iterations;
+  solver_options.function_tolerance = options.function_tolerance;
+  solver_options.gradient_tolerance = options.gradient_tolerance;
+  solver_options.parameter_tolerance = options.parameter_tolerance;
+  solver_options.num_threads = options.num_threads;
+  solver_options.logging_type = ceres::SILENT;
+  solver_options.minimizer_progress_to_stdout = false;
+  ceres::Solver::Summary summary;
+  const auto start = std::chrono::steady_clock::now();
+  ceres::Solve(solver_options, &problem, &summary);
+  report.seconds = Seconds(start);
+  report.initial_cost = summary.initial_cost;
+  report.final_cost = summary.final_cost;
+  report.num_iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  report.usable = summary.IsSolutionUsable();
+  report.termination = std::string(ceres::TerminationTypeToString(summary.termination_type)) + ": " +
+                       summary.message;
+  for (auto& pose : state->poses) pose[3] = WrapAngle(pose[3]);
+  return report;
+}
+
+}  // namespace
+
+TrackFit TrackFitter::Fit(const Track& track) const {
+  const auto start = std::chrono::steady_clock::now();
+  CheckTrack(track, options_);
+  const std::string name = "track " + std::to_string(track.id) +
+                           (track.sequence.empty() ? "" : " of sequence " + track.sequence);
+  const int num_frames = int(track.frames.size());
+  const int nr = lookup_.num_components();
+  const bool single = options_.single_frame;
+
+  const InitialState init = InitializeTrack(track, options_);
+  FitState state;
+  state.codes.assign(single ? num_frames : 1, Eigen::VectorXd::Zero(nr));
+  state.poses = init.poses;
+  state.velocities = init.velocities;
+  state.models.assign(num_frames, "none");
+
+  std::vector<Association> data(num_frames);
+  int frames_with_data = 0;
+  for (int k = 0; k < num_frames; ++k) {
+    data[k] = AssociateByDetection(track.frames[k], options_.association_radius);
+    frames_with_data += int(data[k].points.size()) >= options_.min_points_per_frame;
+  }
+  SAMP_CHECK(frames_with_data > 0) << name << " has no frame with >= " << options_.min_points_per_frame
+                                   << " stereo points within " << options_.association_radius
+                                   << " m of the detection";
+
+  TrackFit fit;
+  fit.track_id = track.id;
+  fit.sequence = track.sequence;
+  fit.type = track.type;
+  fit.single_frame = single;
+  const double first_scale = options_.em_iterations > 0 ? options_.em_initial_sigma_scale : 1.0;
+  fit.summary.solves.push_back(Solve(lookup_, track, data, first_scale, options_, &state));
+  for (int it = 0; it < options_.em_iterations; ++it) {
+    // Re-associate with the fitted shape and trajectory.
+    std::vector<AlignedBox> boxes(state.codes.size());
+    for (size_t c = 0; c < state.codes.size(); ++c) boxes[c] = lookup_.InsideBox(state.codes[c]);
+    std::vector<Association> refined(num_frames);
+    int refined_frames = 0;
+    for (int k = 0; k < num_frames; ++k) {
+      const int c = single ? k : 0;
+      if (boxes[c].IsEmpty()) continue;
+      refined[k] = AssociateByFit(track.frames[k], lookup_, state.codes[c], state.poses[k], boxes[c], options_);
+      refined_frames += int(refined[k].points.size()) >= options_.min_points_per_frame;
+    }
+    if (refined_frames == 0) {
+      LogWarning() << name << ": EM association found no points; keeping the detection association";
+      break;
+    }
+    data = std::move(refined);
+    fit.summary.solves.push_back(Solve(lookup_, track, data, 1.0, options_, &state));
+  }
+
+  // Results.
+  fit.summary.initial_cost = fit.summary.solves.front().initial_cost;
+  fit.summary.final_cost = fit.summary.solves.back().final_cost;
+  fit.summary.usable = true;
+  for (const SolveReport& s : fit.summary.solves) {
+    fit.summary.num_iterations += s.num_iterations;
+    fit.summary.usable = fit.summary.usable && s.usable;
+  }
+  if (single) {
+    fit.shape_code = Eigen::VectorXd::Zero(nr);
+    for (const auto& z : state.codes) fit.shape_code += z / double(num_frames);
+  } else {
+    fit.shape_code = state.codes[0];
+  }
+  fit.frames.resize(num_frames);
+  for (int k = 0; k < num_frames; ++k) {
+    FrameFit& out = fit.frames[k];
+    const TrackFrame& f = track.frames[k];
+    out.frame = f.frame;
+    out.time = f.time;
+    out.position = state.poses[k].head<3>();
+    out.yaw = WrapAngle(state.poses[k][3]);
+    out.motion_model = state.models[k];
+    out.num_points = int(data[k].points.size()) >= options_.min_points_per_frame ? int(data[k].points.size()) : 0;
+    const Eigen::VectorXd& z = state.codes[single ? k : 0];
+    if (single) out.shape_code = z;
+    if (!single) {
+      out.speed = state.velocities[k][0];
+      out.yaw_rate = state.velocities[k][1];
+    }
+    if (out.num_points > 0) {
+      const Eigen::Isometry3d object_from_world = ObjectFromWorld(out.position, out.yaw);
+      double sum = 0.0;
+      for (size_t i = 0; i < data[k].points.size(); ++i) {
+        const Eigen::Vector3d o = object_from_world * data[k].points[i];
+        const double s = lookup_.Evaluate(z.data(), o.data(), nullptr, nullptr) / data[k].sigmas[i];
+        const double psi = SdfCost::Psi(s, options_.huber_threshold, nullptr);
+        sum += psi * psi;
+      }
+      out.data_cost = sum / double(data[k].points.size());
+      if (options_.keep_points) out.points_in_world = data[k].points;
+    }
+  }
+  if (single) {
+    // Velocities by finite differences of the fitted poses (reported only).
+    for (int k = 0; k < num_frames; ++k) {
+      const int a = std::max(0, k - 1), b = std::min(num_frames - 1, std::max(k, a + 1));
+      if (a == b) continue;
+      const double dt = fit.frames[b].time - fit.frames[a].time;
+      fit.frames[k].speed = (fit.frames[b].position - fit.frames[a].position).norm() / dt;
+      fit.frames[k].yaw_rate = WrapAngle(fit.frames[b].yaw - fit.frames[a].yaw) / dt;
+    }
+  }
+  fit.summary.seconds = Seconds(start);
+  if (!fit.summary.usable) LogWarning() << name << ": solver result not usable: " << fit.summary.BriefReport();
+  return fit;
+}
+
+}  // namespace samp

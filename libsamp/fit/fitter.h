@@ -1,0 +1,141 @@
+// Joint shape and trajectory fit of one tracked car (SAMP, Sections 3.2-3.4;
+// docs/fitting.md): one shape code z shared by all frames, per frame a pose
+// (t, theta) and velocities (v, omega), minimising with Ceres
+// Levenberg-Marquardt
+//   E = (1/T) sum_t [E_data,t + E_motion,t + E_ground,t] + E_shape
+// with hard EM over the point association. Also the single-frame mode (the
+// authors' GCPR 2016 method): a shape per frame and no motion term.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "libsamp/core/mesh.h"
+#include "libsamp/fit/motion_model.h"
+#include "libsamp/fit/shape_lookup.h"
+#include "libsamp/fit/track.h"
+
+namespace samp {
+
+struct FitOptions {
+  // Single-frame mode: independent shape and pose per frame, no motion term.
+  bool single_frame = false;
+  // Hard-EM passes after the first solve (re-association + solve), >= 0.
+  int em_iterations = 1;
+  // sigma_d of every point is multiplied by this in the first solve (uncertain association), >= 1.
+  double em_initial_sigma_scale = 2.0;
+  // Initial association: candidate points within this distance of the detection's box centre, m.
+  double association_radius = 3.0;
+  // EM association: |phi_z| at the fitted pose below this, m ...
+  double em_distance_threshold = 0.3;
+  // ... and inside the fitted shape's box enlarged by this margin, m.
+  double em_box_margin = 0.3;
+  // Frames with fewer associated points get no data term (motion carries them).
+  int min_points_per_frame = 10;
+  // Huber threshold of the data term, in units of sigma_d.
+  double huber_threshold = 1.0;
+  // Standard deviation of the car's height above that frame's road plane, m.
+  double sigma_ground = 0.1;
+  // Weight lambda of the shape prior lambda sum (z_i / sigma_i)^2.
+  double shape_prior_weight = 1.0;
+  // Motion-model thresholds: |v| < standing_speed -> standing (m/s);
+  // |omega| < straight_yaw_rate -> straight line (rad/s), else circular arc.
+  double standing_speed = 1.0;
+  double straight_yaw_rate = 0.05;
+  MotionNoise motion_noise;
+  // Ceres: iterations per solve, tolerances, linear solver
+  // ("sparse_normal_cholesky", "dense_schur", "iterative_schur", "dense_qr").
+  int max_iterations = 50;
+  double function_tolerance = 1e-6;
+  double gradient_tolerance = 1e-10;
+  double parameter_tolerance = 1e-8;
+  std::string linear_solver = "sparse_normal_cholesky";
+  // Threads Ceres uses inside one solve (tracks are parallelised by the caller).
+  int num_threads = 1;
+  // Keep the associated points in the result (for the aligned-points PLY).
+  bool keep_points = true;
+
+  // Throws samp::Error naming the field and rule it broke; returns true otherwise.
+  bool Check() const;
+};
+
+// One Ceres solve.
+struct SolveReport {
+  double initial_cost = 0.0;  // Ceres cost (1/2 E) before and after
+  double final_cost = 0.0;
+  int num_iterations = 0;     // LM iterations (successful + unsuccessful)
+  double seconds = 0.0;
+  bool usable = false;        // ceres::Solver::Summary::IsSolutionUsable()
+  std::string termination;    // Ceres' termination type and message
+  int num_points = 0;         // data points in the problem
+};
+
+struct FitSummary {
+  std::vector<SolveReport> solves;  // initial solve, then one per EM iteration
+  double initial_cost = 0.0;        // first solve, before
+  double final_cost = 0.0;          // last solve, after
+  int num_iterations = 0;           // summed over solves
+  double seconds = 0.0;             // whole fit including association
+  bool usable = false;              // every solve usable
+  std::string BriefReport() const;
+};
+
+struct FrameFit {
+  int frame = 0;
+  double time = 0.0;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // object origin in the world
+  double yaw = 0.0;                                     // about world y, (-pi, pi]
+  double speed = 0.0;                                   // m/s (single-frame: finite differences)
+  double yaw_rate = 0.0;                                // rad/s
+  // Model predicting this frame from the previous one in the last solve
+  // (frame 0 and single-frame mode: "none").
+  std::string motion_model = "none";
+  int num_points = 0;                                   // associated in the last solve
+  double data_cost = 0.0;                               // (1/N) sum rho(s_i) at the solution
+  std::vector<Eigen::Vector3d> points_in_world;         // when options.keep_points
+  Eigen::VectorXd shape_code;                           // single-frame mode only
+  Eigen::Isometry3d WorldFromObject() const;
+};
+
+struct TrackFit {
+  int track_id = 0;
+  std::string sequence;
+  std::string type = "Car";
+  bool single_frame = false;
+  Eigen::VectorXd shape_code;  // joint mode (single-frame: the mean of the frames' codes)
+  std::vector<FrameFit> frames;
+  FitSummary summary;
+};
+
+// Fits tracks against one shape model. Holds a ShapeLookup (the model
+// re-laid out); Fit() is const and may be called concurrently.
+class TrackFitter {
+ public:
+  TrackFitter(const ShapeModel& model, const FitOptions& options);
+
+  // Throws samp::Error naming the track on bad input (fewer than 2 frames in
+  // joint mode, non-increasing times, no frame with enough points, non-finite
+  // values). Non-convergence is reported in the summary, not thrown.
+  TrackFit Fit(const Track& track) const;
+
+  const ShapeLookup& lookup() const { return lookup_; }
+  const FitOptions& options() const { return options_; }
+
+ private:
+  ShapeLookup lookup_;
+  FitOptions options_;
+};
+
+// Initial states of a track (paper Section 3.4), exposed for tests: poses
+// from the detections projected onto the road plane, speed and yaw rate from
+// the median of successive detections, yaw from the detections (standing) or
+// the first-to-last segment (moving), 180-degree detection flips resolved.
+struct InitialState {
+  std::vector<Eigen::Vector4d> poses;      // (tx, ty, tz, theta)
+  std::vector<Eigen::Vector2d> velocities; // (v, omega)
+  bool standing = false;
+};
+InitialState InitializeTrack(const Track& track, const FitOptions& options);
+
+}  // namespace samp
