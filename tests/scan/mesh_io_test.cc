@@ -52,6 +52,18 @@ TEST(MeshIo, LoadsOff) {
   fs::remove_all(dir);
 }
 
+TEST(MeshIo, LoadsAsciiPlyWithQuads) {
+  const fs::path dir = test::TempDir("ply");
+  test::WriteText(dir / "quad.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                  "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                  "end_header\n0 0 0\n3 0 0\n3 2 0\n0 2 0\n4 0 1 2 3\n");
+  const Mesh mesh = LoadMesh((dir / "quad.ply").string());
+  EXPECT_EQ(mesh.triangles.size(), 2u);
+  EXPECT_TRUE(mesh.Bounds().max.isApprox(Eigen::Vector3d(3, 2, 0)));
+  fs::remove_all(dir);
+}
+
 TEST(MeshIo, AppliesNodeTransforms) {
   // An AC3D file whose object is translated by its 'loc' (a node transform).
   const fs::path dir = test::TempDir("ac");
