@@ -1,0 +1,181 @@
+#include "libsamp/fit/observations.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "libsamp/core/error.h"
+#include "libsamp/fit/stereo.h"
+
+namespace samp {
+namespace {
+
+constexpr double kCarZ = 10.0;        // front face of the box car, m
+constexpr double kRoadY = 1.65;       // road 1.65 m below the camera
+constexpr double kCarTopY = 0.15;     // car roof at y = 0.15 (1.5 m high)
+constexpr double kWallZ = 30.0;       // background wall
+
+StereoCalibration Calibration() {
+  StereoCalibration c;
+  c.baseline = 0.54;
+  return c;
+}
+
+// Disparity of a scene: the front face of a car (|x| <= 1, kCarTopY <= y <=
+// kRoadY, z = kCarZ), the road y = kRoadY, a wall at kWallZ.
+cv::Mat SceneDisparity(const StereoCalibration& c) {
+  cv::Mat disparity(c.camera.height, c.camera.width, CV_32FC1);
+  const double fb = c.camera.fx * c.baseline;
+  for (int v = 0; v < disparity.rows; ++v)
+    for (int u = 0; u < disparity.cols; ++u) {
+      const Eigen::Vector3d ray = c.camera.Ray(u, v);
+      double z = kWallZ;
+      const Eigen::Vector3d on_face = ray * kCarZ;
+      if (std::abs(on_face.x()) <= 1.0 && on_face.y() >= kCarTopY && on_face.y() <= kRoadY) {
+        z = kCarZ;
+      } else if (ray.y() > 0 && kRoadY / ray.y() < kWallZ) {
+        z = kRoadY / ray.y();
+      }
+      disparity.at<float>(v, u) = static_cast<float>(fb / z);
+    }
+  return disparity;
+}
+
+TrackFrame CarFrame(const StereoCalibration& c, const Eigen::Isometry3d& world_from_camera) {
+  TrackFrame frame;
+  frame.frame = 4;
+  frame.world_from_camera = world_from_camera;
+  frame.ground_plane_in_world = TransformPlane(Eigen::Vector4d(0, -1, 0, kRoadY), world_from_camera);
+  ObjectLabel& d = frame.detection;
+  d.height = 1.5;
+  d.width = 2.0;
+  d.length = 2.0;
+  d.position = Eigen::Vector3d(0, kRoadY, kCarZ + 1.0);  // bottom centre of a 2 m deep box
+  const Eigen::Vector2d top_left = c.camera.Project(Eigen::Vector3d(-1, kCarTopY, kCarZ));
+  const Eigen::Vector2d bottom_right = c.camera.Project(Eigen::Vector3d(1, kRoadY, kCarZ));
+  d.box_2d << top_left.x(), top_left.y(), bottom_right.x(), bottom_right.y();
+  return frame;
+}
+
+Eigen::Isometry3d SomePose() {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.linear() = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  pose.translation() = Eigen::Vector3d(5, -0.2, 40);
+  return pose;
+}
+
+TEST(ObservationsTest, TransformPlaneAndCenter) {
+  const Eigen::Isometry3d pose = SomePose();
+  const Eigen::Vector4d plane_in_camera(0.01, -0.999, 0.02, 1.6);
+  const Eigen::Vector4d plane_in_world = TransformPlane(plane_in_camera, pose);
+  const Eigen::Vector3d x(2, 0.3, 9);
+  EXPECT_NEAR(plane_in_world.head<3>().dot(pose * x) + plane_in_world[3],
+              plane_in_camera.head<3>().dot(x) + plane_in_camera[3], 1e-12);
+  ObjectLabel d;
+  d.position = Eigen::Vector3d(1, 1.6, 12);
+  d.height = 1.4;
+  EXPECT_TRUE(DetectionCenter(d).isApprox(Eigen::Vector3d(1, 0.9, 12)));
+}
+
+TEST(ObservationsTest, PointsOfABoxCar) {
+  const StereoCalibration c = Calibration();
+  const cv::Mat disparity = SceneDisparity(c);
+  const Eigen::Isometry3d pose = SomePose();
+  TrackFrame frame = CarFrame(c, pose);
+  ObservationOptions options;
+  options.max_points_per_frame = 0;  // all
+  const int total = ExtractObservations(disparity, c, options, 0, &frame);
+
+  // Expected: the face pixels more than min_height_above_road above the road.
+  int expected = 0;
+  for (int v = 0; v < c.camera.height; ++v)
+    for (int u = 0; u < c.camera.width; ++u) {
+      const Eigen::Vector3d on_face = c.camera.Ray(u, v) * kCarZ;
+      if (std::abs(on_face.x()) <= 1.0 && on_face.y() >= kCarTopY &&
+          on_face.y() < kRoadY - options.min_height_above_road)
+        ++expected;
+    }
+  ASSERT_GT(expected, 10000);
+  EXPECT_NEAR(total, expected, 0.01 * expected);
+  ASSERT_EQ(static_cast<int>(frame.candidate_points_in_world.size()), total);
+  ASSERT_EQ(frame.candidate_sigmas.size(), frame.candidate_points_in_world.size());
+  ASSERT_EQ(frame.candidate_depths.size(), frame.candidate_points_in_world.size());
+  const double sigma = kCarZ * kCarZ * 1.0 / (c.baseline * c.camera.fx);  // 0.2567 m
+  for (size_t i = 0; i < frame.candidate_points_in_world.size(); ++i) {
+    const Eigen::Vector3d in_camera = pose.inverse() * frame.candidate_points_in_world[i];
+    ASSERT_NEAR(in_camera.z(), kCarZ, 1e-3);  // no road, no wall
+    ASSERT_NEAR(frame.candidate_depths[i], kCarZ, 1e-3);
+    ASSERT_NEAR(frame.candidate_sigmas[i], sigma, 1e-4);
+    ASSERT_GT(kRoadY - in_camera.y(), options.min_height_above_road - 1e-9);
+  }
+  EXPECT_NEAR(sigma, 0.25666, 1e-4);
+  // sigma_disparity scales sigma_d.
+  options.sigma_disparity_px = 0.5;
+  ExtractObservations(disparity, c, options, 0, &frame);
+  EXPECT_NEAR(frame.candidate_sigmas.front(), 0.5 * sigma, 1e-4);
+}
+
+TEST(ObservationsTest, DistanceGateAndRoadFilter) {
+  const StereoCalibration c = Calibration();
+  const cv::Mat disparity = SceneDisparity(c);
+  TrackFrame frame = CarFrame(c, Eigen::Isometry3d::Identity());
+  ObservationOptions options;
+  options.max_points_per_frame = 0;
+  options.max_distance_to_detection = 1.2;
+  const int gated = ExtractObservations(disparity, c, options, 0, &frame);
+  EXPECT_GT(gated, 0);
+  const Eigen::Vector3d center = DetectionCenter(frame.detection);
+  for (const Eigen::Vector3d& p : frame.candidate_points_in_world) ASSERT_LE((p - center).norm(), 1.2 + 1e-9);
+  options.max_distance_to_detection = 4.0;
+  const int all = ExtractObservations(disparity, c, options, 0, &frame);
+  EXPECT_GT(all, gated);
+  // A higher road threshold removes the lower part of the car.
+  options.min_height_above_road = 0.8;
+  const int high = ExtractObservations(disparity, c, options, 0, &frame);
+  EXPECT_LT(high, all);
+  for (const Eigen::Vector3d& p : frame.candidate_points_in_world) ASSERT_LT(p.y(), kRoadY - 0.8 + 1e-9);
+  // The margin lets in more of the road and wall, but they are filtered out.
+  options.min_height_above_road = 0.15;
+  options.box_margin = 0.5;
+  EXPECT_EQ(ExtractObservations(disparity, c, options, 0, &frame), all);
+  // A box outside the image yields no points, no error.
+  frame.detection.box_2d << -500, -400, -100, -50;
+  EXPECT_EQ(ExtractObservations(disparity, c, options, 0, &frame), 0);
+  EXPECT_TRUE(frame.candidate_points_in_world.empty());
+}
+
+TEST(ObservationsTest, SubsamplingIsBoundedAndSeeded) {
+  const StereoCalibration c = Calibration();
+  const cv::Mat disparity = SceneDisparity(c);
+  ObservationOptions options;
+  options.max_points_per_frame = 500;
+  TrackFrame a = CarFrame(c, Eigen::Isometry3d::Identity());
+  TrackFrame b = a, other_track = a;
+  const int total = ExtractObservations(disparity, c, options, 3, &a);
+  EXPECT_GT(total, 500);
+  ASSERT_EQ(a.candidate_points_in_world.size(), 500u);
+  ExtractObservations(disparity, c, options, 3, &b);
+  ExtractObservations(disparity, c, options, 4, &other_track);
+  EXPECT_EQ(a.candidate_points_in_world, b.candidate_points_in_world);
+  EXPECT_NE(a.candidate_points_in_world, other_track.candidate_points_in_world);
+  // Spread over the whole face, not a clump: the subsample spans most of it.
+  double min_x = 1e9, max_x = -1e9;
+  for (const Eigen::Vector3d& p : a.candidate_points_in_world) {
+    min_x = std::min(min_x, p.x());
+    max_x = std::max(max_x, p.x());
+  }
+  EXPECT_GT(max_x - min_x, 1.8);
+}
+
+TEST(ObservationsTest, OptionsCheck) {
+  ObservationOptions options;
+  EXPECT_TRUE(options.Check());
+  options.sigma_disparity_px = 0;
+  EXPECT_THROW(options.Check(), Error);
+  options = ObservationOptions();
+  options.max_points_per_frame = -1;
+  EXPECT_THROW(options.Check(), Error);
+}
+
+}  // namespace
+}  // namespace samp
