@@ -1,0 +1,386 @@
+#include "libsamp/fit/sequence.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+
+#include "libsamp/core/error.h"
+#include "libsamp/core/log.h"
+#include "libsamp/fit/kitti_io.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+
+// ---------------------------------------------------------------------------
+// A tiny synthetic sequence: a box car crossing at ~12 m in front of an ego
+// camera that drives forward; road 1.65 m below the camera, a wall at 40 m.
+
+constexpr double kRoadY = 1.65;
+constexpr double kWallZ = 40.0;
+const Eigen::Vector3d kCarHalf(0.8, 0.75, 2.0);  // half extents x y z, m
+
+StereoCalibration SmallCalibration() {
+  StereoCalibration c;
+  c.camera.fx = c.camera.fy = 350;
+  c.camera.cx = 200;
+  c.camera.cy = 75;
+  c.camera.width = 400;
+  c.camera.height = 150;
+  c.baseline = 0.54;
+  return c;
+}
+
+Eigen::Isometry3d Ego(int frame) {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();
+  pose.translation() = Eigen::Vector3d(0, 0, 0.5 * frame);
+  return pose;
+}
+
+Eigen::Vector3d CarCenterInWorld(int frame) { return Eigen::Vector3d(-2.0 + 0.6 * frame, kRoadY - 0.75, 13.0); }
+
+// Depth along the ray from `origin` (camera frame) through direction `ray`
+// (z = 1) and the hit point: box car, road, wall.
+double Cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& ray, const Eigen::Vector3d& car_center,
+            Eigen::Vector3d* hit) {
+  double t_near = -1e9, t_far = 1e9;
+  for (int k = 0; k < 3; ++k) {
+    const double lo = car_center[k] - kCarHalf[k], hi = car_center[k] + kCarHalf[k];
+    if (std::abs(ray[k]) < 1e-12) {
+      if (origin[k] < lo || origin[k] > hi) t_near = 1e10;
+      continue;
+    }
+    double t0 = (lo - origin[k]) / ray[k], t1 = (hi - origin[k]) / ray[k];
+    if (t0 > t1) std::swap(t0, t1);
+    t_near = std::max(t_near, t0);
+    t_far = std::min(t_far, t1);
+  }
+  double t = kWallZ;
+  if (t_near <= t_far && t_near > 0) {
+    t = t_near;
+  } else if (ray.y() > 0 && (kRoadY - origin.y()) / ray.y() < kWallZ) {
+    t = (kRoadY - origin.y()) / ray.y();
+  }
+  *hit = origin + t * ray;
+  return t;  // = depth, as ray.z() = 1
+}
+
+// Procedural texture (cells of 4 cm) so that SGBM can match.
+uint8_t Texture(const Eigen::Vector3d& p_in_world) {
+  const long long x = static_cast<long long>(std::floor(p_in_world.x() / 0.04));
+  const long long y = static_cast<long long>(std::floor(p_in_world.y() / 0.04));
+  const long long z = static_cast<long long>(std::floor(p_in_world.z() / 0.04));
+  unsigned long long h = static_cast<unsigned long long>(x * 73856093LL ^ y * 19349663LL ^ z * 83492791LL);
+  h ^= h >> 13;
+  h *= 0x5bd1e995ULL;
+  h ^= h >> 15;
+  return static_cast<uint8_t>(40 + h % 176);
+}
+
+void RenderFrame(const StereoCalibration& c, int frame, cv::Mat* disparity, cv::Mat* left, cv::Mat* right) {
+  const Eigen::Isometry3d ego = Ego(frame);
+  const Eigen::Vector3d car = ego.inverse() * CarCenterInWorld(frame);
+  *disparity = cv::Mat(c.camera.height, c.camera.width, CV_32FC1);
+  *left = cv::Mat(c.camera.height, c.camera.width, CV_8UC1);
+  *right = cv::Mat(c.camera.height, c.camera.width, CV_8UC1);
+  for (int v = 0; v < c.camera.height; ++v)
+    for (int u = 0; u < c.camera.width; ++u) {
+      const Eigen::Vector3d ray = c.camera.Ray(u, v);
+      Eigen::Vector3d hit;
+      const double z = Cast(Eigen::Vector3d::Zero(), ray, car, &hit);
+      disparity->at<float>(v, u) = static_cast<float>(c.camera.fx * c.baseline / z);
+      left->at<uint8_t>(v, u) = Texture(ego * hit);
+      const Eigen::Vector3d right_origin(c.baseline, 0, 0);
+      Cast(right_origin, ray, car, &hit);
+      right->at<uint8_t>(v, u) = Texture(ego * hit);
+    }
+}
+
+ObjectLabel CarDetection(const StereoCalibration& c, int frame) {
+  const Eigen::Vector3d center = Ego(frame).inverse() * CarCenterInWorld(frame);
+  ObjectLabel d;
+  d.type = "Car";
+  d.height = 2 * kCarHalf.y();
+  d.width = 2 * kCarHalf.x();
+  d.length = 2 * kCarHalf.z();
+  d.position = center + Eigen::Vector3d(0, kCarHalf.y(), 0);
+  d.rotation_y = -M_PI / 2;  // length along z
+  Eigen::Vector2d lo(1e9, 1e9), hi(-1e9, -1e9);
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d corner = center + Eigen::Vector3d((k & 1 ? 1 : -1) * kCarHalf.x(),
+                                                            (k & 2 ? 1 : -1) * kCarHalf.y(),
+                                                            (k & 4 ? 1 : -1) * kCarHalf.z());
+    const Eigen::Vector2d p = c.camera.Project(corner);
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  d.box_2d << std::max(0.0, lo.x()), std::max(0.0, lo.y()), std::min(c.camera.width - 1.0, hi.x()),
+      std::min(c.camera.height - 1.0, hi.y());
+  return d;
+}
+
+std::string Tag(int frame) { return std::string("000007_0") + std::to_string(frame); }
+
+class SequenceTest : public ::testing::Test {
+ protected:
+  static constexpr int kFrames = 5;
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("samp_sequence_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name()) / "000007";
+    fs::remove_all(dir_.parent_path());
+    fs::create_directories(dir_);
+    const StereoCalibration c = SmallCalibration();
+    WriteCalibration((dir_ / "calib" / "000007.txt").string(), c);
+    std::vector<Eigen::Isometry3d> poses;
+    for (int t = 0; t < kFrames; ++t) poses.push_back(Ego(t));
+    WritePoses((dir_ / "poses" / "000007.txt").string(), poses);
+    for (int t = 0; t < kFrames; ++t) {
+      cv::Mat disparity, left, right;
+      RenderFrame(c, t, &disparity, &left, &right);
+      cv::imwrite((dir_ / "image_2").string() + "/" + Tag(t) + ".png", (fs::create_directories(dir_ / "image_2"), left));
+      cv::imwrite((dir_ / "image_3").string() + "/" + Tag(t) + ".png", (fs::create_directories(dir_ / "image_3"), right));
+      if (t != 3) WriteDisparity((dir_ / "disparity" / (Tag(t) + ".png")).string(), disparity);  // frame 3: SGBM
+      if (t != 2) WritePlane((dir_ / "planes" / (Tag(t) + ".txt")).string(), Eigen::Vector4d(0, -1, 0, kRoadY));  // frame 2: RANSAC
+      std::vector<ObjectLabel> detections;
+      if (t != 1) detections.push_back(CarDetection(c, t));  // missed in frame 1
+      ObjectLabel pedestrian = CarDetection(c, t);
+      pedestrian.type = "Pedestrian";
+      pedestrian.position.x() += 4;
+      detections.push_back(pedestrian);  // another type: ignored
+      WriteLabels((dir_ / "detections" / (Tag(t) + ".txt")).string(), detections);
+    }
+  }
+  void TearDown() override { fs::remove_all(dir_.parent_path()); }
+  fs::path dir_;
+};
+
+TEST_F(SequenceTest, ListsTheDirectory) {
+  const SequenceFiles files = ListSequence(dir_.string());
+  EXPECT_EQ(files.name, "000007");
+  ASSERT_EQ(files.frames.size(), static_cast<size_t>(kFrames));
+  EXPECT_FALSE(files.poses.empty());
+  EXPECT_TRUE(files.frames[3].disparity.empty());
+  EXPECT_FALSE(files.frames[3].image_right.empty());
+  EXPECT_TRUE(files.frames[2].plane.empty());
+  EXPECT_EQ(files.frames[4].frame, 4);
+}
+
+TEST_F(SequenceTest, EndToEnd) {
+  SequenceOptions options;
+  options.stereo.num_disparities = 32;
+  SequenceSummary summary;
+  const std::vector<Track> tracks = LoadSequenceTracks(dir_.string(), options, &summary);
+  ASSERT_EQ(tracks.size(), 1u) << summary.BriefReport();
+  const Track& track = tracks[0];
+  EXPECT_EQ(track.id, 0);
+  EXPECT_EQ(track.sequence, "000007");
+  EXPECT_EQ(track.type, "Car");
+  EXPECT_NEAR(track.calibration.baseline, 0.54, 1e-9);
+  EXPECT_EQ(track.calibration.camera.width, 400);
+  EXPECT_EQ(track.calibration.camera.height, 150);
+  ASSERT_EQ(track.frames.size(), 4u);  // frame 1 missed
+  const std::vector<int> expected_frames = {0, 2, 3, 4};
+  for (size_t i = 0; i < track.frames.size(); ++i) {
+    const TrackFrame& f = track.frames[i];
+    const int t = expected_frames[i];
+    SCOPED_TRACE("frame " + std::to_string(t));
+    EXPECT_EQ(f.frame, t);
+    EXPECT_DOUBLE_EQ(f.time, t / 10.0);
+    EXPECT_EQ(f.detection.frame, t);
+    EXPECT_EQ(f.detection.track_id, 0);
+    EXPECT_TRUE(f.world_from_camera.isApprox(Ego(t), 1e-9));
+    // Road plane in world: y = 1.65 (the ego only moves along z).
+    EXPECT_NEAR(f.ground_plane_in_world[1], -1.0, t == 2 ? 1e-2 : 1e-9);
+    EXPECT_NEAR(f.ground_plane_in_world[3], kRoadY, t == 2 ? 0.03 : 1e-9);
+    ASSERT_GT(f.candidate_points_in_world.size(), 500u);
+    ASSERT_LE(f.candidate_points_in_world.size(), 5000u);
+    // The points lie on the car's box surface (SGBM in frame 3: approximately).
+    const Eigen::Vector3d center = CarCenterInWorld(t);
+    std::vector<double> outside;
+    for (const Eigen::Vector3d& p : f.candidate_points_in_world) {
+      const Eigen::Vector3d q = ((p - center).cwiseAbs() - kCarHalf).cwiseMax(0.0);
+      outside.push_back(q.norm());
+    }
+    std::sort(outside.begin(), outside.end());
+    EXPECT_LT(outside[outside.size() / 2], t == 3 ? 0.1 : 0.01);
+    if (t != 3) {
+      EXPECT_LT(outside[outside.size() * 95 / 100], 0.02);
+    }
+    for (size_t k = 0; k < f.candidate_sigmas.size(); ++k) {
+      const double z = f.candidate_depths[k];
+      ASSERT_NEAR(f.candidate_sigmas[k], z * z / (0.54 * 350), 1e-6);
+    }
+  }
+  EXPECT_EQ(summary.name, "000007");
+  EXPECT_EQ(summary.num_frames, kFrames);
+  EXPECT_TRUE(summary.poses_from_file);
+  EXPECT_FALSE(summary.tracks_from_labels);
+  EXPECT_EQ(summary.frames_with_estimated_plane, 1);
+  EXPECT_EQ(summary.frames_plane_estimation_failed, 0);
+  EXPECT_EQ(summary.frames_with_computed_disparity, 1);
+  EXPECT_EQ(summary.num_tracks, 1);
+  EXPECT_EQ(summary.num_track_frames, 4);
+  EXPECT_EQ(summary.num_track_frames_without_points, 0);
+  EXPECT_FALSE(summary.BriefReport().empty());
+  ASSERT_EQ(summary.messages.size(), 2u);  // the RANSAC plane and the SGBM disparity
+}
+
+TEST_F(SequenceTest, TracksFromALabelFileAndFrameRange) {
+  const StereoCalibration c = SmallCalibration();
+  std::vector<ObjectLabel> labels;
+  for (int t = 0; t < kFrames; ++t) {
+    ObjectLabel l = CarDetection(c, t);
+    l.frame = t;
+    l.track_id = 42;
+    labels.push_back(l);
+  }
+  const std::string path = (dir_.parent_path() / "label_02" / "000007.txt").string();
+  WriteTrackingLabels(path, labels);
+  SequenceOptions options;
+  options.tracking_labels_path = path;
+  options.first_frame = 1;
+  options.last_frame = 2;
+  SequenceSummary summary;
+  const std::vector<Track> tracks = LoadSequenceTracks(dir_.string(), options, &summary);
+  ASSERT_EQ(tracks.size(), 1u);
+  EXPECT_EQ(tracks[0].id, 42);
+  ASSERT_EQ(tracks[0].frames.size(), 2u);
+  EXPECT_EQ(tracks[0].frames[0].frame, 1);
+  EXPECT_TRUE(summary.tracks_from_labels);
+  EXPECT_EQ(summary.num_frames, 2);
+  // A label in a frame the sequence lacks is an error.
+  labels[0].frame = 17;
+  WriteTrackingLabels(path, labels);
+  options.first_frame = options.last_frame = -1;
+  EXPECT_THROW(LoadSequenceTracks(dir_.string(), options, nullptr), Error);
+}
+
+template <typename F>
+void ExpectError(F f, const std::string& fragment) {
+  try {
+    f();
+    FAIL() << "no samp::Error thrown";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(SequenceTest, StaticCameraWithoutPoses) {
+  fs::remove_all(dir_ / "poses");
+  SequenceSummary summary;
+  const std::vector<Track> tracks = LoadSequenceTracks(dir_.string(), SequenceOptions(), &summary);
+  EXPECT_FALSE(summary.poses_from_file);
+  // The car drives 0.6 m/frame relative to a moving ego: with a static
+  // camera assumed it is still one track, in camera coordinates.
+  ASSERT_EQ(tracks.size(), 1u);
+  EXPECT_TRUE(tracks[0].frames[1].world_from_camera.isApprox(Eigen::Isometry3d::Identity()));
+  EXPECT_NE(summary.messages.front().find("static camera"), std::string::npos);
+}
+
+TEST_F(SequenceTest, BadInputNamesTheFile) {
+  ExpectError([&] { LoadSequenceTracks((dir_.parent_path() / "nope").string(), SequenceOptions()); }, "does not exist");
+  // Missing detections file of a frame.
+  fs::remove(dir_ / "detections" / (Tag(4) + ".txt"));
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "detections/000007_04.txt");
+  WriteLabels((dir_ / "detections" / (Tag(4) + ".txt")).string(), {});
+  // Malformed detection.
+  std::ofstream((dir_ / "detections" / (Tag(2) + ".txt")).string()) << "Car 0 0 0 1 2 3 4 1 1 1 0 1.6 -4 0\n";
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "000007_02.txt:1: object at z = -4");
+  WriteLabels((dir_ / "detections" / (Tag(2) + ".txt")).string(), {});
+  // Disparity of the wrong size.
+  WriteDisparity((dir_ / "disparity" / (Tag(0) + ".png")).string(), cv::Mat(10, 10, CV_32FC1, cv::Scalar(5)));
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "000007_00.png: disparity is 10x10");
+  fs::remove(dir_ / "disparity" / (Tag(0) + ".png"));
+  // Neither disparity nor the right image.
+  fs::remove(dir_ / "image_3" / (Tag(0) + ".png"));
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "no image_2/image_3 pair");
+  // Poses too short.
+  WritePoses((dir_ / "poses" / "000007.txt").string(), {Eigen::Isometry3d::Identity()});
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "poses/000007.txt: 1 poses");
+  // Missing calibration.
+  fs::remove_all(dir_ / "calib");
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "no calib/ folder");
+}
+
+TEST_F(SequenceTest, MalformedPlaneNamesTheFile) {
+  std::ofstream((dir_ / "planes" / (Tag(0) + ".txt")).string()) << "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1 0\n";
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "000007_00.txt:4: 3 numbers");
+}
+
+// ---------------------------------------------------------------------------
+// The real KITTI frame in ../shared/kitti/000046, when present.
+
+std::string SharedKitti() {
+  const char* env = std::getenv("SAMP_SHARED_DIR");
+  const std::string shared = env != nullptr ? env : SAMP_SHARED_DIR;
+  return shared + "/kitti/000046";
+}
+
+TEST(RealKittiTest, ReadsFrame10) {
+  const std::string dir = SharedKitti();
+  if (!fs::exists(dir)) GTEST_SKIP() << dir << " not present";
+  const SequenceReader reader(dir, SequenceOptions());
+  EXPECT_EQ(reader.files().name, "000046");
+  ASSERT_EQ(reader.num_frames(), 1);
+  EXPECT_EQ(reader.files().frames[0].frame, 10);
+  const StereoCalibration& c = reader.calibration();
+  EXPECT_NEAR(c.camera.fx, 721.5377, 1e-9);
+  EXPECT_NEAR(c.baseline, 0.5327, 1e-3);
+  EXPECT_EQ(c.camera.width, 1242);
+  EXPECT_EQ(c.camera.height, 375);
+  EXPECT_TRUE(reader.has_poses());
+  const SequenceFrame frame = reader.ReadFrame(0);
+  EXPECT_FALSE(frame.plane_estimated);
+  EXPECT_FALSE(frame.disparity_computed);
+  EXPECT_NEAR(frame.plane_in_camera[3], 1.66, 0.05);  // ~1.65 m below the camera
+  EXPECT_LT(frame.plane_in_camera[1], -0.99);
+  ASSERT_EQ(frame.detections.size(), 1u);  // "car", case-insensitive
+  EXPECT_NEAR(frame.detections[0].position.z(), 13.3, 1e-9);
+  EXPECT_NEAR(frame.world_from_camera.translation().z(), ReadPoses(dir + "/poses/000046.txt")[10].translation().z(), 1e-12);
+}
+
+TEST(RealKittiTest, FindsTheCarsPoints) {
+  const std::string dir = SharedKitti();
+  if (!fs::exists(dir)) GTEST_SKIP() << dir << " not present";
+  SequenceOptions options;
+  options.tracker.min_track_length = 1;  // one frame: the single-frame path
+  SequenceSummary summary;
+  const std::vector<Track> tracks = LoadSequenceTracks(dir, options, &summary);
+  ASSERT_EQ(tracks.size(), 1u) << summary.BriefReport();
+  ASSERT_EQ(tracks[0].frames.size(), 1u);
+  const TrackFrame& f = tracks[0].frames[0];
+  EXPECT_EQ(f.frame, 10);
+  ASSERT_GT(f.candidate_points_in_world.size(), 1000u);
+  std::vector<float> depths = f.candidate_depths;
+  std::sort(depths.begin(), depths.end());
+  const float median = depths[depths.size() / 2];
+  EXPECT_GT(median, 12.0f);
+  EXPECT_LT(median, 15.0f);
+  // Points are above the road and near the detection.
+  const Eigen::Vector3d center = f.world_from_camera * DetectionCenter(f.detection);
+  for (const Eigen::Vector3d& p : f.candidate_points_in_world) {
+    ASSERT_GT(f.ground_plane_in_world.head<3>().dot(p) + f.ground_plane_in_world[3], 0.1);
+    ASSERT_LT((p - center).norm(), 4.0 + 1e-9);
+  }
+  // RANSAC on the real stereo agrees with the plane file.
+  const SequenceReader reader(dir, options);
+  SequenceFrame frame = reader.ReadFrame(0);
+  RoadPlaneSummary plane_summary;
+  const std::vector<StereoPoint> points =
+      DisparityToPoints(frame.disparity_px, reader.calibration(), 1.0, 2, cv::Rect(0, 125, 1242, 250));
+  const Eigen::Vector4d plane = EstimateRoadPlane(points, RoadPlaneOptions(), &plane_summary);
+  ASSERT_TRUE(plane_summary.success) << plane_summary.BriefReport();
+  EXPECT_NEAR(plane[3], frame.plane_in_camera[3], 0.1);
+  EXPECT_GT(plane.head<3>().dot(frame.plane_in_camera.head<3>()), std::cos(2.0 * M_PI / 180));
+}
+
+}  // namespace
+}  // namespace samp
