@@ -15,16 +15,19 @@
 namespace samp {
 namespace {
 
-// A bumpy car-sized ellipsoid of ~100k triangles (224 x 224 UV sphere).
+// A bumpy car-sized ellipsoid (4.4 x 1.5 x 1.8 m) on an n x n UV sphere.
+Mesh MakeBumpyMesh(int n) {
+  Mesh m = MakeSphereMesh(Eigen::Vector3d::Zero(), 1.0, n, n);
+  for (Eigen::Vector3f& v : m.vertices) {
+    const float bump = 1.f + 0.06f * std::sin(9.f * v.x()) * std::sin(11.f * v.y()) * std::sin(13.f * v.z());
+    v = Eigen::Vector3f(2.2f * v.x(), 0.75f * v.y(), 0.9f * v.z()) * bump;
+  }
+  return m;
+}
+
+// ~100k triangles (224 x 224).
 const Mesh& BumpyMesh() {
-  static const Mesh mesh = [] {
-    Mesh m = MakeSphereMesh(Eigen::Vector3d::Zero(), 1.0, 224, 224);
-    for (Eigen::Vector3f& v : m.vertices) {
-      const float bump = 1.f + 0.06f * std::sin(9.f * v.x()) * std::sin(11.f * v.y()) * std::sin(13.f * v.z());
-      v = Eigen::Vector3f(2.2f * v.x(), 0.75f * v.y(), 0.9f * v.z()) * bump;
-    }
-    return m;
-  }();
+  static const Mesh mesh = MakeBumpyMesh(224);
   return mesh;
 }
 
@@ -168,10 +171,12 @@ void BM_SceneBuild(benchmark::State& state) {
 }
 BENCHMARK(BM_SceneBuild)->Unit(benchmark::kMillisecond);
 
-// A KITTI-sized frame (1242 x 375) of the mesh 10 m ahead, all cores.
+// A KITTI-sized frame (1242 x 375) of the mesh 10 m ahead, all cores. Arg:
+// n of the n x n sphere (224: 100k triangles; 50: 5k, the size of a CAD car).
 void BM_Render(benchmark::State& state) {
   const PinholeCamera camera;  // KITTI defaults
-  PlacedMesh placed{&BumpyMesh(), Eigen::Isometry3d::Identity()};
+  const Mesh mesh = MakeBumpyMesh(int(state.range(0)));
+  PlacedMesh placed{&mesh, Eigen::Isometry3d::Identity()};
   placed.camera_from_object.translation() = Eigen::Vector3d(0, 0.8, 10);
   int64_t rays = 0;
   for (auto _ : state) {
@@ -179,9 +184,10 @@ void BM_Render(benchmark::State& state) {
     benchmark::DoNotOptimize(buffers.depth.data());
     rays += int64_t(camera.width) * camera.height;
   }
+  state.counters["triangles"] = double(mesh.triangles.size());
   state.counters["rays_per_s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_Render)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Render)->Arg(224)->Arg(50)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
 }  // namespace samp
