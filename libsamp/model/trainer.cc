@@ -30,17 +30,6 @@ double SecondsSince(Clock::time_point start) {
 
 nlohmann::json Vector3Json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
-nlohmann::json CanonicalizeJson(const CanonicalizeOptions& c) {
-  nlohmann::json j;
-  if (c.scale) j["scale"] = *c.scale;
-  if (c.target_length) j["target_length"] = *c.target_length;
-  j["up"] = c.up;
-  j["forward"] = c.forward;
-  j["min_size"] = Vector3Json(c.min_size);
-  j["max_size"] = Vector3Json(c.max_size);
-  return j;
-}
-
 // One mesh file of the CAD folder and how to treat it.
 struct Job {
   std::string path;           // as found
