@@ -1,0 +1,844 @@
+#include "libsamp/eval/evaluation.h"
+
+#include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <set>
+#include <sstream>
+
+#include "libsamp/core/atomic_file.h"
+#include "libsamp/core/error.h"
+#include "libsamp/core/log.h"
+#include "libsamp/core/progress.h"
+#include "libsamp/eval/metrics.h"
+#include "libsamp/fit/fit_output.h"
+#include "libsamp/fit/kitti_io.h"
+#include "libsamp/fit/sequence.h"
+#include "libsamp/fit/shape_lookup.h"
+#include "libsamp/model/shape_model.h"
+#include "libsamp/fit/stereo.h"
+#include "libsamp/scan/mesh_io.h"
+#include "libsamp/scan/renderer.h"
+#include "libsamp/viz/image.h"
+#include "libsamp/viz/plot.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr char kStereo[] = "stereo";
+constexpr char kDetections[] = "detections";
+
+std::string FrameFile(const std::string& seq, int frame, const char* extension) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%s_%02d%s", seq.c_str(), frame, extension);
+  return buffer;
+}
+
+std::string Fixed(double value, int digits) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, value);
+  return buffer;
+}
+
+Eigen::Isometry3d CameraFromObject(const ObjectLabel& label) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  const double c = std::cos(label.rotation_y), s = std::sin(label.rotation_y);
+  t.linear() << c, 0, s, 0, 1, 0, -s, 0, c;
+  t.translation() = label.position;
+  return t;
+}
+
+// The 2D box (x1, y1, x2, y2) of the projected 3D box, clipped to the image;
+// all zero when nothing of it lies in front of the camera.
+Eigen::Vector4d ProjectedBox(const ObjectLabel& label, const PinholeCamera& camera) {
+  const Eigen::Isometry3d camera_from_object = CameraFromObject(label);
+  double x1 = 1e300, y1 = 1e300, x2 = -1e300, y2 = -1e300;
+  bool any = false;
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d corner((i & 1 ? 0.5 : -0.5) * label.length, (i & 2 ? -label.height : 0.0),
+                                 (i & 4 ? 0.5 : -0.5) * label.width);
+    const Eigen::Vector3d p = camera_from_object * corner;
+    if (p.z() < 0.1) continue;
+    const Eigen::Vector2d uv = camera.Project(p);
+    x1 = std::min(x1, uv.x()), y1 = std::min(y1, uv.y());
+    x2 = std::max(x2, uv.x()), y2 = std::max(y2, uv.y());
+    any = true;
+  }
+  if (!any) return Eigen::Vector4d::Zero();
+  x1 = std::clamp(x1, 0.0, camera.width - 1.0), x2 = std::clamp(x2, 0.0, camera.width - 1.0);
+  y1 = std::clamp(y1, 0.0, camera.height - 1.0), y2 = std::clamp(y2, 0.0, camera.height - 1.0);
+  return Eigen::Vector4d(x1, y1, x2, y2);
+}
+
+double BoxIou(const Eigen::Vector4d& a, const Eigen::Vector4d& b) {
+  const double iw = std::min(a[2], b[2]) - std::max(a[0], b[0]);
+  const double ih = std::min(a[3], b[3]) - std::max(a[1], b[1]);
+  if (iw <= 0 || ih <= 0) return 0.0;
+  const double inter = iw * ih;
+  const double area_a = (a[2] - a[0]) * (a[3] - a[1]), area_b = (b[2] - b[0]) * (b[3] - b[1]);
+  return inter / std::max(1e-12, area_a + area_b - inter);
+}
+
+// Greedy one-to-one matching by decreasing IoU. Returns per truth the index of
+// the matched estimate or -1.
+std::vector<int> MatchBoxes(const std::vector<Eigen::Vector4d>& truth,
+                            const std::vector<Eigen::Vector4d>& estimates, double min_iou) {
+  struct Pair {
+    double iou;
+    int t, e;
+  };
+  std::vector<Pair> pairs;
+  for (size_t t = 0; t < truth.size(); ++t) {
+    for (size_t e = 0; e < estimates.size(); ++e) {
+      const double iou = BoxIou(truth[t], estimates[e]);
+      if (iou >= min_iou) pairs.push_back({iou, int(t), int(e)});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+    if (a.iou != b.iou) return a.iou > b.iou;
+    if (a.t != b.t) return a.t < b.t;
+    return a.e < b.e;
+  });
+  std::vector<int> match(truth.size(), -1);
+  std::vector<bool> used(estimates.size(), false);
+  for (const Pair& p : pairs) {
+    if (match[p.t] >= 0 || used[p.e]) continue;
+    match[p.t] = p.e;
+    used[p.e] = true;
+  }
+  return match;
+}
+
+cv::Mat ReadPngOfType(const std::string& path, int type, const cv::Size& size) {
+  SAMP_CHECK(fs::exists(path)) << "eval: missing file " << path;
+  cv::Mat image = cv::imread(path, cv::IMREAD_UNCHANGED);
+  SAMP_CHECK(!image.empty()) << "eval: cannot decode " << path;
+  SAMP_CHECK(image.type() == type) << "eval: " << path << " has the wrong pixel type (expected "
+                                   << (type == CV_16UC1 ? "uint16" : "uint8") << ", 1 channel)";
+  SAMP_CHECK(size.empty() || image.size() == size)
+      << "eval: " << path << " is " << image.cols << "x" << image.rows << ", expected " << size.width
+      << "x" << size.height;
+  return image;
+}
+
+// One method's view of one ground-truth car-frame.
+struct MethodRecord {
+  bool matched = false;
+  bool has_shape = false;
+  double translation_error = 0.0, yaw_error_deg = 0.0;
+  int num_estimated_points = 0;
+  std::vector<ShapeScores> scores;  // per tau
+};
+
+struct Record {
+  std::string sequence;
+  int track_id = 0, frame = 0;
+  double distance = 0.0;
+  int segment_pixels = 0;
+  int num_true_points = 0;
+  std::vector<MethodRecord> methods;
+};
+
+struct MethodInfo {
+  std::string name, folder;
+  bool shape = false, pose = false;
+};
+
+// Where a result keeps its files for `seq`.
+std::string ResultFolder(const std::string& folder, const std::string& seq) {
+  if (fs::exists(fs::path(folder) / "label_02" / (seq + ".txt"))) return folder;
+  if (fs::exists(fs::path(folder) / seq / "label_02" / (seq + ".txt"))) return (fs::path(folder) / seq).string();
+  return "";
+}
+
+// The mesh file of a track in a result folder (meshes/<seq>/ when the fit had
+// several sequences, else meshes/); per-frame meshes first. "" when none exists.
+std::string FindMeshFile(const std::string& folder, const std::string& seq, int track_id, int frame) {
+  char per_frame[64], per_frame2[64];
+  std::snprintf(per_frame, sizeof(per_frame), "track_%d_frame_%02d.ply", track_id, frame);
+  std::snprintf(per_frame2, sizeof(per_frame2), "track_%d_%02d.ply", track_id, frame);
+  for (const fs::path& meshes : {fs::path(folder) / "meshes" / seq, fs::path(folder) / "meshes"}) {
+    for (const std::string& name : {std::string(per_frame), std::string(per_frame2),
+                                    "track_" + std::to_string(track_id) + ".ply"}) {
+      if (fs::exists(meshes / name)) return (meshes / name).string();
+    }
+  }
+  return "";
+}
+
+// The fitted surfaces of one result folder. A single-frame fit has a shape per
+// frame: when tracks.json holds per-frame shape codes, the surface of each frame
+// is extracted from the model named there (fit/fit_output.h FittedSurface);
+// otherwise the mesh files are used. Load() everything first; Get() is then
+// const and thread-safe.
+class ResultMeshes {
+ public:
+  explicit ResultMeshes(const std::string& folder) : folder_(folder) {
+    const fs::path tracks = fs::path(folder) / "tracks.json";
+    if (!fs::exists(tracks)) return;
+    std::ifstream in(tracks);
+    nlohmann::json j;
+    try {
+      in >> j;
+    } catch (const std::exception& e) {
+      SAMP_THROW() << "eval: cannot parse " << tracks.string() << ": " << e.what();
+    }
+    if (!j.contains("sequences")) return;
+    for (const auto& sequence : j["sequences"]) {
+      if (!sequence.contains("tracks")) continue;
+      const std::string seq = sequence.value("name", "");
+      for (const auto& track : sequence["tracks"]) {
+        if (track.value("mode", "") != "single_frame" || !track.contains("frames")) continue;
+        for (const auto& frame : track["frames"]) {
+          if (!frame.contains("shape_code")) continue;
+          const std::vector<double> code = frame["shape_code"].get<std::vector<double>>();
+          codes_[Key(seq, track.value("track_id", -1), frame.value("frame", -1))] =
+              Eigen::Map<const Eigen::VectorXd>(code.data(), Eigen::Index(code.size()));
+        }
+      }
+    }
+    if (!codes_.empty()) {
+      model_path_ = j.value("model", "");
+      SAMP_CHECK(!model_path_.empty()) << "eval: " << tracks.string()
+                                       << " has per-frame shape codes but names no model";
+    }
+  }
+
+  // Makes the surface of (seq, track, frame) available; throws when there is none.
+  void Load(const std::string& seq, int track_id, int frame) {
+    const std::string key = Key(seq, track_id, frame);
+    if (codes_.count(key)) {
+      if (!meshes_.count(key)) pending_codes_.insert(key);
+      return;
+    }
+    const std::string path = FindMeshFile(folder_, seq, track_id, frame);
+    SAMP_CHECK(!path.empty()) << "eval: no mesh for track " << track_id << " of " << seq << " in "
+                              << folder_ << "/meshes";
+    files_[key] = path;
+    if (!meshes_.count(path)) meshes_[path] = std::make_unique<Mesh>(LoadMesh(path));
+  }
+
+  // Extracts the pending per-frame surfaces (in parallel).
+  void Finish() {
+    if (pending_codes_.empty()) return;
+    if (!lookup_) {
+      LogInfo() << "eval: extracting per-frame surfaces of " << folder_ << " from model " << model_path_;
+      lookup_ = std::make_unique<ShapeLookup>(ShapeModel::Load(model_path_));
+    }
+    const std::vector<std::string> keys(pending_codes_.begin(), pending_codes_.end());
+    std::vector<Mesh> surfaces(keys.size());
+    tbb::parallel_for(size_t(0), keys.size(),
+                      [&](size_t i) { surfaces[i] = FittedSurface(*lookup_, codes_.at(keys[i])); });
+    for (size_t i = 0; i < keys.size(); ++i) meshes_[keys[i]] = std::make_unique<Mesh>(std::move(surfaces[i]));
+    pending_codes_.clear();
+  }
+
+  const Mesh& Get(const std::string& seq, int track_id, int frame) const {
+    const std::string key = Key(seq, track_id, frame);
+    const auto file = files_.find(key);
+    return *meshes_.at(file != files_.end() ? file->second : key);
+  }
+
+ private:
+  static std::string Key(const std::string& seq, int track_id, int frame) {
+    return seq + "/" + std::to_string(track_id) + "/" + std::to_string(frame);
+  }
+  std::string folder_;
+  std::string model_path_;
+  std::map<std::string, Eigen::VectorXd> codes_;
+  std::set<std::string> pending_codes_;
+  std::map<std::string, std::string> files_;
+  std::map<std::string, std::unique_ptr<Mesh>> meshes_;
+  std::unique_ptr<ShapeLookup> lookup_;
+};
+
+std::vector<Eigen::Vector3d> BackProjectDepth(const cv::Mat& depth_mm256,
+                                              const std::vector<cv::Point>& pixels,
+                                              const PinholeCamera& camera) {
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(pixels.size());
+  for (const cv::Point& p : pixels) {
+    const uint16_t value = depth_mm256.at<uint16_t>(p);
+    if (value == 0) continue;
+    points.push_back(camera.Ray(p.x, p.y) * (value / 256.0));
+  }
+  return points;
+}
+
+// Renders `mesh` at `camera_from_object` into the part of the camera covering
+// `pixels` and returns the surface points seen at those pixels.
+std::vector<Eigen::Vector3d> RenderedPoints(const Mesh& mesh, const Eigen::Isometry3d& camera_from_object,
+                                            const std::vector<cv::Point>& pixels,
+                                            const PinholeCamera& camera) {
+  if (pixels.empty()) return {};
+  int u0 = camera.width, v0 = camera.height, u1 = -1, v1 = -1;
+  for (const cv::Point& p : pixels) {
+    u0 = std::min(u0, p.x), v0 = std::min(v0, p.y), u1 = std::max(u1, p.x), v1 = std::max(v1, p.y);
+  }
+  PinholeCamera crop = camera;
+  crop.width = u1 - u0 + 1;
+  crop.height = v1 - v0 + 1;
+  crop.cx = camera.cx - u0;
+  crop.cy = camera.cy - v0;
+  const RenderBuffers buffers = Render(crop, {PlacedMesh{&mesh, camera_from_object}});
+  std::vector<Eigen::Vector3d> points;
+  points.reserve(pixels.size());
+  for (const cv::Point& p : pixels) {
+    const float z = buffers.Depth(p.x - u0, p.y - v0);
+    if (!std::isfinite(z)) continue;
+    points.push_back(camera.Ray(p.x, p.y) * double(z));
+  }
+  return points;
+}
+
+std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::string& directory,
+                                     const std::vector<MethodInfo>& methods,
+                                     std::vector<std::unique_ptr<ResultMeshes>>* result_meshes,
+                                     std::set<std::string>* tracks) {
+  const SequenceFiles files = ListSequence(directory);
+  const std::string seq = files.name;
+  const fs::path gt = fs::path(directory) / "gt";
+  const std::vector<ObjectLabel> gt_labels =
+      ReadTrackingLabels((gt / "label_02" / (seq + ".txt")).string());
+  std::map<int, std::vector<ObjectLabel>> gt_by_frame;
+  for (const ObjectLabel& l : gt_labels) gt_by_frame[l.frame].push_back(l);
+  if (gt_by_frame.empty()) {
+    LogWarning() << "eval: " << directory << ": no ground-truth labels";
+    return {};
+  }
+  // Image size from the first depth map.
+  const cv::Mat first_depth =
+      ReadPngOfType((gt / "depth" / FrameFile(seq, gt_by_frame.begin()->first, ".png")).string(),
+                    CV_16UC1, cv::Size());
+  const StereoCalibration calibration =
+      ReadCalibration(files.calibration, first_depth.cols, first_depth.rows);
+  const PinholeCamera& camera = calibration.camera;
+  const cv::Size size(camera.width, camera.height);
+
+  // Each method's labels of this sequence, by frame.
+  std::vector<std::map<int, std::vector<ObjectLabel>>> labels(methods.size());
+  std::vector<std::string> result_folders(methods.size());
+  for (size_t m = 0; m < methods.size(); ++m) {
+    if (methods[m].name == kStereo) continue;
+    if (methods[m].name == kDetections) {
+      for (const auto& [frame, unused] : gt_by_frame) {
+        const fs::path path = fs::path(directory) / "detections" / FrameFile(seq, frame, ".txt");
+        if (!fs::exists(path)) continue;
+        for (ObjectLabel l : ReadLabels(path.string())) {
+          if (!SameObjectType(l.type, "Car")) continue;
+          l.frame = frame;
+          labels[m][frame].push_back(l);
+        }
+      }
+      continue;
+    }
+    result_folders[m] = ResultFolder(methods[m].folder, seq);
+    if (result_folders[m].empty()) {
+      LogWarning() << "eval: result '" << methods[m].name << "' has no label_02/" << seq
+                   << ".txt in " << methods[m].folder << "; counted as no output for " << seq;
+      continue;
+    }
+    for (const ObjectLabel& l :
+         ReadTrackingLabels((fs::path(result_folders[m]) / "label_02" / (seq + ".txt")).string())) {
+      if (SameObjectType(l.type, "Car")) labels[m][l.frame].push_back(l);
+    }
+  }
+
+  // Match per frame and collect the work.
+  struct Work {
+    Record record;
+    std::vector<cv::Point> pixels;
+    std::vector<const ObjectLabel*> matched;  // per method
+  };
+  std::vector<Work> work;
+  for (const auto& [frame, truths] : gt_by_frame) {
+    const cv::Mat object_map =
+        ReadPngOfType((gt / "obj_map" / FrameFile(seq, frame, ".png")).string(), CV_8UC1, size);
+    std::vector<Eigen::Vector4d> truth_boxes;
+    for (const ObjectLabel& t : truths) truth_boxes.push_back(ProjectedBox(t, camera));
+    std::vector<std::vector<int>> matches(methods.size());
+    for (size_t m = 0; m < methods.size(); ++m) {
+      if (methods[m].name == kStereo) continue;
+      std::vector<Eigen::Vector4d> boxes;
+      for (const ObjectLabel& e : labels[m][frame]) boxes.push_back(ProjectedBox(e, camera));
+      matches[m] = MatchBoxes(truth_boxes, boxes, options.min_iou);
+    }
+    std::vector<std::vector<cv::Point>> segments(256);
+    for (int v = 0; v < object_map.rows; ++v) {
+      for (int u = 0; u < object_map.cols; ++u) {
+        const uint8_t k = object_map.at<uint8_t>(v, u);
+        if (k > 0) segments[k].emplace_back(u, v);
+      }
+    }
+    for (size_t t = 0; t < truths.size(); ++t) {
+      const ObjectLabel& truth = truths[t];
+      SAMP_CHECK(truth.track_id >= 0 && truth.track_id < 255)
+          << "eval: " << seq << " frame " << frame << ": ground-truth track id " << truth.track_id
+          << " outside the object map's range 0..254";
+      const std::vector<cv::Point>& segment = segments[truth.track_id + 1];
+      if (int(segment.size()) < options.min_segment_pixels) continue;
+      Work w;
+      w.record.sequence = seq;
+      w.record.track_id = truth.track_id;
+      w.record.frame = frame;
+      w.record.distance = truth.position.norm();
+      w.record.segment_pixels = int(segment.size());
+      w.record.methods.resize(methods.size());
+      w.pixels = segment;
+      w.matched.assign(methods.size(), nullptr);
+      for (size_t m = 0; m < methods.size(); ++m) {
+        if (methods[m].name == kStereo) {
+          w.record.methods[m].matched = true;
+          continue;
+        }
+        if (matches[m][t] < 0) continue;
+        const ObjectLabel& e = labels[m][frame][matches[m][t]];
+        w.matched[m] = &e;
+        MethodRecord& r = w.record.methods[m];
+        r.matched = true;
+        r.translation_error = (e.position - truth.position).norm();
+        r.yaw_error_deg = YawErrorDeg(e.rotation_y, truth.rotation_y);
+        if (methods[m].shape) (*result_meshes)[m]->Load(seq, e.track_id, frame);
+      }
+      tracks->insert(seq + "/" + std::to_string(truth.track_id));
+      work.push_back(std::move(w));
+    }
+  }
+
+  // Shape scores, in parallel over car-frames (inputs read first).
+  std::map<int, cv::Mat> depths, disparities;
+  for (const Work& w : work) {
+    const int f = w.record.frame;
+    if (!depths.count(f)) {
+      depths[f] = ReadPngOfType((gt / "depth" / FrameFile(seq, f, ".png")).string(), CV_16UC1, size);
+      const fs::path disparity = fs::path(directory) / "disparity" / FrameFile(seq, f, ".png");
+      if (options.stereo_baseline) {
+        SAMP_CHECK(fs::exists(disparity)) << "eval: missing " << disparity.string()
+                                          << " (needed by the stereo baseline)";
+        disparities[f] = ReadDisparity(disparity.string(), size);
+      }
+    }
+  }
+  for (auto& meshes : *result_meshes) {
+    if (meshes) meshes->Finish();
+  }
+  const double max_tau = options.taus.back();
+  tbb::parallel_for(size_t(0), work.size(), [&](size_t i) {
+    Work& w = work[i];
+    const std::vector<Eigen::Vector3d> truth = BackProjectDepth(depths.at(w.record.frame), w.pixels, camera);
+    w.record.num_true_points = int(truth.size());
+    for (size_t m = 0; m < methods.size(); ++m) {
+      MethodRecord& r = w.record.methods[m];
+      if (!methods[m].shape || !r.matched) continue;
+      std::vector<Eigen::Vector3d> estimated;
+      if (methods[m].name == kStereo) {
+        const cv::Mat& disparity = disparities.at(w.record.frame);
+        for (const cv::Point& p : w.pixels) {
+          const float d = disparity.at<float>(p);
+          if (d > 0.f) estimated.push_back(DisparityToPoint(p.x, p.y, d, calibration));
+        }
+      } else {
+        const ObjectLabel& e = *w.matched[m];
+        const Mesh& mesh = (*result_meshes)[m]->Get(seq, e.track_id, w.record.frame);
+        estimated = RenderedPoints(mesh, CameraFromObject(e), w.pixels, camera);
+      }
+      r.num_estimated_points = int(estimated.size());
+      const ShapeComparison comparison = CompareShapes(estimated, truth, max_tau);
+      for (double tau : options.taus) r.scores.push_back(comparison.At(tau));
+      r.has_shape = true;
+    }
+  });
+  std::vector<Record> records;
+  for (Work& w : work) records.push_back(std::move(w.record));
+  return records;
+}
+
+PoseWindow MakeWindow(double lo, double hi, const std::vector<double>& translation,
+                      const std::vector<double>& yaw) {
+  PoseWindow w;
+  w.min_distance = lo;
+  w.max_distance = hi;
+  w.count = int(translation.size());
+  w.translation_mean = Mean(translation);
+  w.translation_median = Median(translation);
+  w.yaw_mean_deg = Mean(yaw);
+  w.yaw_median_deg = Median(yaw);
+  return w;
+}
+
+std::string WindowName(const PoseWindow& w) {
+  return Fixed(w.min_distance, 0) + "-" + Fixed(w.max_distance, 0) + " m";
+}
+
+// The rows of a pose table: each window, then ">= first window", then "all".
+std::vector<std::pair<std::string, PoseWindow>> PoseRows(const MethodPoseResult& p) {
+  std::vector<std::pair<std::string, PoseWindow>> rows;
+  for (const PoseWindow& w : p.windows) rows.emplace_back(WindowName(w), w);
+  rows.emplace_back(">= " + Fixed(p.beyond_first.min_distance, 0) + " m", p.beyond_first);
+  rows.emplace_back("all", p.all);
+  return rows;
+}
+
+void WritePlots(const EvalOptions& options, const EvalSummary& summary) {
+  const fs::path out(options.output_folder);
+  struct Figure {
+    const char* file;
+    const char* title;
+    const char* y_label;
+    int which;
+  };
+  for (const Figure& fig : {Figure{"f1_vs_tau.png", "F1 score", "F1 [%]", 0},
+                            Figure{"accuracy_vs_tau.png", "Accuracy", "accuracy [%]", 1},
+                            Figure{"completeness_vs_tau.png", "Completeness", "completeness [%]", 2}}) {
+    std::vector<PlotSeries> series;
+    const Marker markers[] = {Marker::kCircle, Marker::kSquare, Marker::kTriangle, Marker::kDiamond};
+    for (size_t m = 0; m < summary.shape.size(); ++m) {
+      const MethodShapeResult& s = summary.shape[m];
+      PlotSeries p;
+      p.label = s.method;
+      p.x = summary.taus;
+      const std::vector<double>& values = fig.which == 0 ? s.f1 : fig.which == 1 ? s.accuracy : s.completeness;
+      for (double v : values) p.y.push_back(100.0 * v);
+      p.marker = markers[m % 4];
+      series.push_back(p);
+    }
+    LinePlotOptions plot;
+    plot.title = std::string(fig.title) + " vs. threshold (" + std::to_string(summary.shape.empty() ? 0 : summary.shape[0].num_evaluated) + " car-frames)";
+    plot.x_label = "tau [m]";
+    plot.y_label = fig.y_label;
+    plot.y_min = 0.0;
+    plot.y_max = 100.0;
+    plot.legend = LegendPosition::kBottomRight;
+    if (!series.empty()) WritePng((out / fig.file).string(), DrawLinePlot(series, plot));
+  }
+  if (summary.pose.empty() || summary.pose[0].windows.empty()) return;
+  std::vector<std::string> categories;
+  for (const PoseWindow& w : summary.pose[0].windows) categories.push_back(WindowName(w));
+  for (int which = 0; which < 2; ++which) {
+    std::vector<BarSeries> series;
+    for (const MethodPoseResult& p : summary.pose) {
+      BarSeries s;
+      s.label = p.method;
+      for (const PoseWindow& w : p.windows) {
+        const double value = which == 0 ? w.translation_median : w.yaw_median_deg;
+        s.values.push_back(w.count > 0 ? value : std::nan(""));
+      }
+      series.push_back(s);
+    }
+    BarPlotOptions plot;
+    plot.title = which == 0 ? "Median translation error" : "Median yaw error";
+    plot.x_label = "distance to the camera";
+    plot.y_label = which == 0 ? "error [m]" : "error [deg]";
+    plot.show_values = true;
+    plot.value_precision = which == 0 ? 2 : 1;
+    plot.legend = LegendPosition::kTopLeft;
+    WritePng((out / (which == 0 ? "translation_vs_distance.png" : "yaw_vs_distance.png")).string(),
+             DrawBarPlot(categories, series, plot));
+  }
+}
+
+}  // namespace
+
+void EvalOptions::Check() const {
+  SAMP_CHECK(!sequences.empty()) << "eval: no sequence given";
+  SAMP_CHECK(!output_folder.empty()) << "eval: output_folder is empty";
+  std::set<std::string> names;
+  for (const auto& [name, folder] : results) {
+    SAMP_CHECK(!name.empty() && name.find_first_of(" ,\t\n") == std::string::npos)
+        << "eval: result name '" << name << "' must be non-empty without spaces or commas";
+    SAMP_CHECK(name != kStereo && name != kDetections)
+        << "eval: result name '" << name << "' is reserved for a baseline";
+    SAMP_CHECK(names.insert(name).second) << "eval: result name '" << name << "' given twice";
+    SAMP_CHECK(fs::is_directory(folder)) << "eval: result folder " << folder << " (" << name
+                                         << ") does not exist";
+  }
+  SAMP_CHECK(!results.empty() || stereo_baseline || detection_baseline)
+      << "eval: nothing to evaluate (no result and no baseline)";
+  SAMP_CHECK(!taus.empty()) << "eval: taus is empty";
+  for (size_t i = 0; i < taus.size(); ++i) {
+    SAMP_CHECK(taus[i] > 0 && std::isfinite(taus[i])) << "eval: taus must be > 0";
+    SAMP_CHECK(i == 0 || taus[i] > taus[i - 1]) << "eval: taus must be increasing";
+  }
+  SAMP_CHECK(std::any_of(taus.begin(), taus.end(), [&](double t) { return std::abs(t - headline_tau) < 1e-9; }))
+      << "eval: headline_tau " << headline_tau << " is not one of taus";
+  SAMP_CHECK(distance_window > 0) << "eval: distance_window must be > 0";
+  SAMP_CHECK(min_segment_pixels >= 1) << "eval: min_segment_pixels must be >= 1";
+  SAMP_CHECK(min_iou > 0 && min_iou <= 1) << "eval: min_iou must be in (0, 1]";
+  SAMP_CHECK(num_threads >= 0) << "eval: num_threads must be >= 0";
+}
+
+std::string EvalOptions::ToJson() const {
+  nlohmann::json results_json = nlohmann::json::array();
+  for (const auto& [name, folder] : results) results_json.push_back({{"name", name}, {"folder", folder}});
+  const nlohmann::json j = {{"sequences", sequences},
+                            {"results", results_json},
+                            {"taus", taus},
+                            {"headline_tau", headline_tau},
+                            {"distance_window", distance_window},
+                            {"min_segment_pixels", min_segment_pixels},
+                            {"min_iou", min_iou},
+                            {"stereo_baseline", stereo_baseline},
+                            {"detection_baseline", detection_baseline}};
+  return j.dump(2);
+}
+
+std::string EvalSummary::BriefReport() const {
+  std::ostringstream out;
+  out << "eval: " << num_sequences << " sequences, " << num_gt_tracks << " tracks, "
+      << num_gt_car_frames << " car-frames";
+  size_t headline = 0;
+  for (size_t i = 0; i < taus.size(); ++i) {
+    if (std::abs(taus[i] - headline_tau) < 1e-9) headline = i;
+  }
+  for (const MethodShapeResult& s : shape) {
+    if (s.f1.empty()) continue;
+    out << "; " << s.method << " F1@" << Fixed(headline_tau, 2) << " " << Fixed(100.0 * s.f1[headline], 2) << "%";
+  }
+  for (const MethodPoseResult& p : pose) {
+    out << "; " << p.method << " median " << Fixed(p.all.translation_median, 2) << " m / "
+        << Fixed(p.all.yaw_median_deg, 1) << " deg";
+  }
+  out << " (" << Fixed(seconds, 1) << " s)";
+  return out.str();
+}
+
+EvalSummary Evaluate(const EvalOptions& options) {
+  options.Check();
+  const auto start = std::chrono::steady_clock::now();
+  std::unique_ptr<tbb::global_control> threads;
+  if (options.num_threads > 0) {
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    size_t(options.num_threads));
+  }
+  std::vector<MethodInfo> methods;
+  if (options.stereo_baseline) methods.push_back({kStereo, "", true, false});
+  if (options.detection_baseline) methods.push_back({kDetections, "", false, true});
+  for (const auto& [name, folder] : options.results) methods.push_back({name, folder, true, true});
+
+  std::vector<Record> records;
+  std::set<std::string> tracks;
+  Progress progress("eval sequences", int64_t(options.sequences.size()));
+  for (const std::string& sequence : options.sequences) {
+    std::vector<std::unique_ptr<ResultMeshes>> result_meshes(methods.size());
+    for (size_t m = 0; m < methods.size(); ++m) {
+      if (!methods[m].shape || methods[m].folder.empty()) continue;
+      const std::string folder = ResultFolder(methods[m].folder, ListSequence(sequence).name);
+      if (!folder.empty()) result_meshes[m] = std::make_unique<ResultMeshes>(folder);
+    }
+    std::vector<Record> r = EvaluateSequence(options, sequence, methods, &result_meshes, &tracks);
+    records.insert(records.end(), std::make_move_iterator(r.begin()), std::make_move_iterator(r.end()));
+    progress.Tick();
+  }
+  progress.Finish();
+
+  EvalSummary summary;
+  summary.taus = options.taus;
+  summary.headline_tau = options.headline_tau;
+  summary.num_sequences = int(options.sequences.size());
+  summary.num_gt_car_frames = int(records.size());
+  summary.num_gt_tracks = int(tracks.size());
+  size_t headline = 0;
+  for (size_t i = 0; i < options.taus.size(); ++i) {
+    if (std::abs(options.taus[i] - options.headline_tau) < 1e-9) headline = i;
+  }
+
+  // Shape over the common set.
+  auto in_common = [&](const Record& r, bool shape) {
+    for (size_t m = 0; m < methods.size(); ++m) {
+      if ((shape ? methods[m].shape : methods[m].pose) && !r.methods[m].matched) return false;
+    }
+    return true;
+  };
+  for (size_t m = 0; m < methods.size(); ++m) {
+    if (!methods[m].shape) continue;
+    MethodShapeResult s;
+    s.method = methods[m].name;
+    s.accuracy.assign(options.taus.size(), 0.0);
+    s.completeness.assign(options.taus.size(), 0.0);
+    s.f1.assign(options.taus.size(), 0.0);
+    for (const Record& r : records) {
+      if (r.methods[m].matched) ++s.num_matched;
+      if (!in_common(r, true)) continue;
+      ++s.num_evaluated;
+      for (size_t i = 0; i < options.taus.size(); ++i) {
+        s.accuracy[i] += r.methods[m].scores[i].accuracy;
+        s.completeness[i] += r.methods[m].scores[i].completeness;
+        s.f1[i] += r.methods[m].scores[i].f1;
+      }
+    }
+    for (size_t i = 0; i < options.taus.size(); ++i) {
+      const double n = std::max(1, s.num_evaluated);
+      s.accuracy[i] /= n, s.completeness[i] /= n, s.f1[i] /= n;
+    }
+    summary.shape.push_back(s);
+  }
+  // Pose over the common set, in distance windows.
+  double max_distance = 0.0;
+  for (const Record& r : records) max_distance = std::max(max_distance, r.distance);
+  const int num_windows = std::max(1, int(std::ceil(max_distance / options.distance_window)));
+  for (size_t m = 0; m < methods.size(); ++m) {
+    if (!methods[m].pose) continue;
+    MethodPoseResult p;
+    p.method = methods[m].name;
+    std::vector<std::vector<double>> translation(num_windows), yaw(num_windows);
+    std::vector<double> all_translation, all_yaw, far_translation, far_yaw;
+    for (const Record& r : records) {
+      if (r.methods[m].matched) ++p.num_matched;
+      if (!in_common(r, false)) continue;
+      const int w = std::min(num_windows - 1, int(r.distance / options.distance_window));
+      translation[w].push_back(r.methods[m].translation_error);
+      yaw[w].push_back(r.methods[m].yaw_error_deg);
+      all_translation.push_back(r.methods[m].translation_error);
+      all_yaw.push_back(r.methods[m].yaw_error_deg);
+      if (w > 0) {
+        far_translation.push_back(r.methods[m].translation_error);
+        far_yaw.push_back(r.methods[m].yaw_error_deg);
+      }
+    }
+    for (int w = 0; w < num_windows; ++w) {
+      p.windows.push_back(MakeWindow(w * options.distance_window, (w + 1) * options.distance_window,
+                                     translation[w], yaw[w]));
+    }
+    p.all = MakeWindow(0.0, num_windows * options.distance_window, all_translation, all_yaw);
+    p.beyond_first = MakeWindow(options.distance_window, num_windows * options.distance_window,
+                                far_translation, far_yaw);
+    summary.pose.push_back(p);
+  }
+
+  // Tables.
+  std::ostringstream md;
+  const std::string tau = Fixed(options.headline_tau, 2);
+  md << "### Shape at tau = " << tau << " m\n\n";
+  const int common_shape = summary.shape.empty() ? 0 : summary.shape[0].num_evaluated;
+  md << common_shape << " car-frames matched by every method (of " << records.size()
+     << " with >= " << options.min_segment_pixels << " visible pixels, " << tracks.size()
+     << " tracks, " << options.sequences.size() << " sequences).\n\n";
+  md << "| Method | Accuracy [%] | Completeness [%] | F1 [%] | Matched car-frames |\n";
+  md << "|---|---:|---:|---:|---:|\n";
+  for (const MethodShapeResult& s : summary.shape) {
+    md << "| " << s.method << " | " << Fixed(100 * s.accuracy[headline], 2) << " | "
+       << Fixed(100 * s.completeness[headline], 2) << " | " << Fixed(100 * s.f1[headline], 2) << " | "
+       << s.num_matched << " / " << records.size() << " |\n";
+  }
+  md << "\n### F1 [%] over tau\n\n| Method |";
+  for (double t : options.taus) md << " " << Fixed(t, 2) << " |";
+  md << "\n|---|";
+  for (size_t i = 0; i < options.taus.size(); ++i) md << "---:|";
+  md << "\n";
+  for (const MethodShapeResult& s : summary.shape) {
+    md << "| " << s.method << " |";
+    for (double v : s.f1) md << " " << Fixed(100 * v, 2) << " |";
+    md << "\n";
+  }
+  md << "\n### Pose\n\n";
+  const int common_pose = summary.pose.empty() ? 0 : summary.pose[0].all.count;
+  md << common_pose << " car-frames matched by every method. Translation error of the object "
+     << "origin (m), absolute yaw error (deg, 180-degree flips count fully).\n\n";
+  md << "| Method | Distance | n | Transl. mean | Transl. median | Yaw mean | Yaw median |\n";
+  md << "|---|---|---:|---:|---:|---:|---:|\n";
+  for (const MethodPoseResult& p : summary.pose) {
+    for (const auto& [name, w] : PoseRows(p)) {
+      md << "| " << p.method << " | " << name
+         << " | " << w.count << " | " << Fixed(w.translation_mean, 3) << " | "
+         << Fixed(w.translation_median, 3) << " | " << Fixed(w.yaw_mean_deg, 2) << " | "
+         << Fixed(w.yaw_median_deg, 2) << " |\n";
+    }
+  }
+  summary.markdown = md.str();
+
+  // Files.
+  const fs::path out(options.output_folder);
+  fs::create_directories(out);
+  WriteTextFileAtomically((out / "results.md").string(), summary.markdown);
+  std::ostringstream shape_csv;
+  shape_csv << "method,tau,accuracy,completeness,f1,car_frames\n";
+  for (const MethodShapeResult& s : summary.shape) {
+    for (size_t i = 0; i < options.taus.size(); ++i) {
+      shape_csv << s.method << "," << options.taus[i] << "," << Fixed(s.accuracy[i], 6) << ","
+                << Fixed(s.completeness[i], 6) << "," << Fixed(s.f1[i], 6) << "," << s.num_evaluated << "\n";
+    }
+  }
+  WriteTextFileAtomically((out / "shape.csv").string(), shape_csv.str());
+  std::ostringstream pose_csv;
+  pose_csv << "method,window,min_distance,max_distance,count,translation_mean,translation_median,yaw_mean_deg,yaw_median_deg\n";
+  for (const MethodPoseResult& p : summary.pose) {
+    for (const auto& [name, w] : PoseRows(p)) {
+      pose_csv << p.method << "," << name << "," << w.min_distance << "," << w.max_distance << "," << w.count << ","
+               << Fixed(w.translation_mean, 6) << "," << Fixed(w.translation_median, 6) << ","
+               << Fixed(w.yaw_mean_deg, 6) << "," << Fixed(w.yaw_median_deg, 6) << "\n";
+    }
+  }
+  WriteTextFileAtomically((out / "pose.csv").string(), pose_csv.str());
+  std::ostringstream object_csv;
+  object_csv << "sequence,track_id,frame,distance,segment_pixels,true_points,method,matched,"
+                "translation_error,yaw_error_deg,estimated_points,accuracy,completeness,f1\n";
+  nlohmann::json per_object = nlohmann::json::array();
+  for (const Record& r : records) {
+    for (size_t m = 0; m < methods.size(); ++m) {
+      const MethodRecord& mr = r.methods[m];
+      object_csv << r.sequence << "," << r.track_id << "," << r.frame << "," << Fixed(r.distance, 3) << ","
+                 << r.segment_pixels << "," << r.num_true_points << "," << methods[m].name << ","
+                 << (mr.matched ? 1 : 0) << ",";
+      if (mr.matched && methods[m].pose) {
+        object_csv << Fixed(mr.translation_error, 4) << "," << Fixed(mr.yaw_error_deg, 3);
+      } else {
+        object_csv << ",";
+      }
+      object_csv << "," << mr.num_estimated_points << ",";
+      if (mr.has_shape) {
+        const ShapeScores& s = mr.scores[headline];
+        object_csv << Fixed(s.accuracy, 4) << "," << Fixed(s.completeness, 4) << "," << Fixed(s.f1, 4);
+      } else {
+        object_csv << ",,";
+      }
+      object_csv << "\n";
+    }
+  }
+  WriteTextFileAtomically((out / "per_object.csv").string(), object_csv.str());
+  nlohmann::json j;
+  j["options"] = nlohmann::json::parse(options.ToJson());
+  j["num_car_frames"] = records.size();
+  j["num_tracks"] = tracks.size();
+  for (const MethodShapeResult& s : summary.shape) {
+    j["shape"].push_back({{"method", s.method},
+                          {"taus", options.taus},
+                          {"accuracy", s.accuracy},
+                          {"completeness", s.completeness},
+                          {"f1", s.f1},
+                          {"car_frames", s.num_evaluated},
+                          {"matched", s.num_matched}});
+  }
+  for (const MethodPoseResult& p : summary.pose) {
+    nlohmann::json windows = nlohmann::json::array();
+    for (const auto& [name, w] : PoseRows(p)) {
+      windows.push_back({{"window", name},
+                         {"min_distance", w.min_distance},
+                         {"max_distance", w.max_distance},
+                         {"count", w.count},
+                         {"translation_mean", w.translation_mean},
+                         {"translation_median", w.translation_median},
+                         {"yaw_mean_deg", w.yaw_mean_deg},
+                         {"yaw_median_deg", w.yaw_median_deg}});
+    }
+    j["pose"].push_back({{"method", p.method}, {"windows", windows}, {"matched", p.num_matched}});
+  }
+  WriteTextFileAtomically((out / "results.json").string(), j.dump(2) + "\n");
+  WritePlots(options, summary);
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+}  // namespace samp

@@ -1,0 +1,142 @@
+#include "libsamp/eval/procedural.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace samp::procedural {
+namespace {
+
+double Smooth(double t) { return t * t * (3.0 - 2.0 * t); }
+
+double Clamp01(double x) { return std::clamp(x, 0.0, 1.0); }
+
+// Distance of x to the nearest multiple of `period` (>= 0).
+double DistanceToGrid(double x, double period) {
+  const double r = x - period * std::floor(x / period);
+  return std::min(r, period - r);
+}
+
+}  // namespace
+
+uint64_t Mix(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ULL;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+  return x ^ (x >> 31);
+}
+
+uint64_t Mix(uint64_t a, uint64_t b) { return Mix(Mix(a) ^ (b + 0x632be59bd9b4e019ULL)); }
+
+double HashToUnit(int64_t x, int64_t y, int64_t z, uint64_t seed) {
+  const uint64_t h = Mix(Mix(Mix(seed, uint64_t(x)), uint64_t(y)), uint64_t(z));
+  return double(h >> 11) * (1.0 / 9007199254740992.0);
+}
+
+double ValueNoise(const Eigen::Vector3d& p, uint64_t seed) {
+  const double fx = std::floor(p.x()), fy = std::floor(p.y()), fz = std::floor(p.z());
+  const int64_t ix = int64_t(fx), iy = int64_t(fy), iz = int64_t(fz);
+  const double tx = Smooth(p.x() - fx), ty = Smooth(p.y() - fy), tz = Smooth(p.z() - fz);
+  double value = 0.0;
+  for (int dz = 0; dz < 2; ++dz) {
+    for (int dy = 0; dy < 2; ++dy) {
+      for (int dx = 0; dx < 2; ++dx) {
+        const double w = (dx ? tx : 1.0 - tx) * (dy ? ty : 1.0 - ty) * (dz ? tz : 1.0 - tz);
+        value += w * HashToUnit(ix + dx, iy + dy, iz + dz, seed);
+      }
+    }
+  }
+  return value;
+}
+
+double FeatureVisibility(double feature_size, double footprint) {
+  // Full weight when the feature spans >= 2 pixels, none below 1 pixel.
+  return Clamp01(feature_size / std::max(footprint, 1e-9) - 1.0);
+}
+
+double Fractal(const Eigen::Vector3d& p, double base_frequency, int octaves, double footprint,
+               uint64_t seed) {
+  double sum = 0.0, amplitude = 1.0, frequency = base_frequency;
+  for (int o = 0; o < octaves; ++o) {
+    const double weight = FeatureVisibility(0.5 / frequency, footprint);
+    if (weight <= 0.0) break;
+    sum += weight * amplitude * (ValueNoise(p * frequency, Mix(seed, uint64_t(o))) - 0.5);
+    amplitude *= 0.5;
+    frequency *= 2.0;
+  }
+  return sum;
+}
+
+Eigen::Vector3d RoadAlbedo(const Eigen::Vector3d& point_in_world, double road_half_width,
+                           double lane_width, double footprint, uint64_t seed) {
+  const double x = point_in_world.x(), z = point_in_world.z();
+  const Eigen::Vector3d flat(x, 0.0, z);
+  if (std::abs(x) < road_half_width) {
+    // Asphalt: grainy fine noise over patchy large-scale variation.
+    double grey = 0.26 + 0.22 * Fractal(flat, 4.0, 5, footprint, Mix(seed, 1)) +
+                  0.10 * Fractal(flat, 0.35, 3, footprint, Mix(seed, 2));
+    // Lane lines: 0.12 m wide, dashed 3 m on / 6 m off, at +-lane_width/2 + k * lane_width.
+    const double line_half = 0.06;
+    const double edge_distance = std::abs(std::abs(x) - (road_half_width - 0.25));
+    double mark = 0.0;
+    if (edge_distance < line_half) mark = 1.0;
+    const double lane_distance = DistanceToGrid(x - 0.5 * lane_width, lane_width);
+    if (lane_distance < line_half && std::abs(x) < road_half_width - 1.0) {
+      const double phase = z - 9.0 * std::floor(z / 9.0);
+      if (phase < 3.0) mark = 1.0;
+    }
+    mark *= FeatureVisibility(2.0 * line_half, footprint) * 0.8 + 0.2;
+    grey = grey * (1.0 - mark) + 0.8 * mark;
+    return Eigen::Vector3d(grey, grey, grey * 1.03).cwiseMax(0.0).cwiseMin(1.0);
+  }
+  // Paving: 0.5 m tiles, per-tile tone, dark joints, fine grain.
+  const double tile = 0.5;
+  const int64_t tx = int64_t(std::floor(x / tile)), tz = int64_t(std::floor(z / tile));
+  double grey = 0.50 + 0.16 * (HashToUnit(tx, 0, tz, Mix(seed, 3)) - 0.5) +
+                0.15 * Fractal(flat, 6.0, 4, footprint, Mix(seed, 4));
+  const double joint = std::min(DistanceToGrid(x, tile), DistanceToGrid(z, tile));
+  if (joint < 0.015) grey = grey * (1.0 - FeatureVisibility(0.03, footprint)) +
+                            0.3 * FeatureVisibility(0.03, footprint);
+  return Eigen::Vector3d(grey * 1.02, grey, grey * 0.96).cwiseMax(0.0).cwiseMin(1.0);
+}
+
+Eigen::Vector3d FacadeAlbedo(double along, double up, const Eigen::Vector3d& base, double footprint,
+                             uint64_t seed) {
+  // Windows: 1.3 m x 1.5 m on a 3.0 m x 3.2 m grid, from 1.0 m above the ground.
+  const double wa = along - 3.0 * std::floor(along / 3.0);
+  const double wu = up - 3.2 * std::floor(up / 3.2);
+  if (up > 1.0 && wa > 0.85 && wa < 2.15 && wu > 0.9 && wu < 2.4) {
+    const Eigen::Vector3d p(along, up, 0.0);
+    const double shade =
+        0.12 + 0.10 * HashToUnit(int64_t(std::floor(along / 3.0)), int64_t(std::floor(up / 3.2)), 0, seed) +
+        0.08 * Fractal(p, 2.0, 3, footprint, Mix(seed, 5));
+    return Eigen::Vector3d(shade, shade * 1.05, shade * 1.15).cwiseMax(0.0).cwiseMin(1.0);
+  }
+  // Bricks: 0.25 x 0.065 m, running bond.
+  const double course = 0.075, brick = 0.25;
+  const int64_t row = int64_t(std::floor(up / course));
+  const double shifted = along + ((row & 1) ? 0.5 * brick : 0.0);
+  const int64_t column = int64_t(std::floor(shifted / brick));
+  const double tone = 0.75 + 0.5 * HashToUnit(column, row, 7, seed);
+  const double vis = FeatureVisibility(course, footprint);
+  const double mix_tone = vis * tone + (1.0 - vis) * 1.0;
+  Eigen::Vector3d albedo = base * mix_tone;
+  const double joint = std::min(DistanceToGrid(up, course), DistanceToGrid(shifted, brick));
+  if (joint < 0.008) {
+    const double w = FeatureVisibility(0.016, footprint);
+    albedo = albedo * (1.0 - w) + Eigen::Vector3d(0.7, 0.7, 0.68) * w;
+  }
+  albedo *= 1.0 + 0.5 * Fractal(Eigen::Vector3d(along, up, 0.0), 0.8, 5, footprint, Mix(seed, 6));
+  return albedo.cwiseMax(0.0).cwiseMin(1.0);
+}
+
+Eigen::Vector3d BlotchAlbedo(const Eigen::Vector3d& point_in_world, const Eigen::Vector3d& base,
+                             double footprint, uint64_t seed) {
+  Eigen::Vector3d albedo;
+  for (int c = 0; c < 3; ++c) {
+    albedo[c] = base[c] * (1.0 + 0.9 * Fractal(point_in_world, 1.5, 6, footprint,
+                                                Mix(seed, uint64_t(10 + c))));
+  }
+  return albedo.cwiseMax(0.0).cwiseMin(1.0);
+}
+
+}  // namespace samp::procedural

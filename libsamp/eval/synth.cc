@@ -1,0 +1,915 @@
+#include "libsamp/eval/synth.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <tbb/parallel_for.h>
+#include <opencv2/imgcodecs.hpp>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "libsamp/core/atomic_file.h"
+#include "libsamp/core/camera.h"
+#include "libsamp/core/error.h"
+#include "libsamp/core/log.h"
+#include "libsamp/core/ply_io.h"
+#include "libsamp/core/progress.h"
+#include "libsamp/eval/procedural.h"
+#include "libsamp/fit/kitti_io.h"
+#include "libsamp/fit/stereo.h"
+#include "libsamp/scan/canonical.h"
+#include "libsamp/scan/mesh_io.h"
+#include "libsamp/scan/renderer.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+using procedural::Mix;
+
+constexpr double kPi = 3.14159265358979323846;
+// Road layout in the world frame (= camera of frame 0): lanes of 3.5 m, road
+// |x| < 7 m, sidewalk to the building line at |x| >= 9 m.
+constexpr double kRoadHalfWidth = 7.0;
+constexpr double kLaneWidth = 3.5;
+constexpr double kMaxCarCentreX = 6.1;
+
+double WrapAngle(double a) {
+  a = std::fmod(a + kPi, 2.0 * kPi);
+  if (a < 0) a += 2.0 * kPi;
+  return a - kPi;
+}
+
+// KITTI's rotation about the camera's y axis: x_object -> (cos, 0, -sin).
+Eigen::Matrix3d RotationY(double angle) {
+  const double c = std::cos(angle), s = std::sin(angle);
+  Eigen::Matrix3d r;
+  r << c, 0, s, 0, 1, 0, -s, 0, c;
+  return r;
+}
+
+// Forward direction of a heading angle (object x axis in the world).
+Eigen::Vector3d Forward(double heading) {
+  return Eigen::Vector3d(std::cos(heading), 0.0, -std::sin(heading));
+}
+
+struct PlanarState {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  double heading = 0.0;
+};
+
+// Exact motion on a circular arc (a straight line when yaw_rate ~ 0) for dt seconds
+// (negative dt goes back in time).
+PlanarState Advance(const PlanarState& start, double speed, double yaw_rate, double dt) {
+  PlanarState end;
+  end.heading = start.heading + yaw_rate * dt;
+  if (std::abs(yaw_rate) < 1e-9) {
+    end.position = start.position + speed * dt * Forward(start.heading);
+  } else {
+    const double r = speed / yaw_rate;
+    end.position = start.position + r * Eigen::Vector3d(std::sin(end.heading) - std::sin(start.heading),
+                                                         0.0,
+                                                         std::cos(end.heading) - std::cos(start.heading));
+  }
+  return end;
+}
+
+// Oriented rectangle on the ground (x, z) for overlap tests.
+struct GroundBox {
+  Eigen::Vector2d centre;
+  Eigen::Vector2d axis_forward, axis_side;
+  double half_length = 0.0, half_width = 0.0;
+};
+
+GroundBox MakeGroundBox(const Eigen::Vector3d& centre, double heading, double length, double width) {
+  GroundBox box;
+  box.centre = Eigen::Vector2d(centre.x(), centre.z());
+  const Eigen::Vector3d f = Forward(heading);
+  box.axis_forward = Eigen::Vector2d(f.x(), f.z());
+  box.axis_side = Eigen::Vector2d(-box.axis_forward.y(), box.axis_forward.x());
+  box.half_length = 0.5 * length;
+  box.half_width = 0.5 * width;
+  return box;
+}
+
+// Separating-axis test with a margin (metres) added to both boxes.
+bool Overlap(const GroundBox& a, const GroundBox& b, double margin) {
+  const Eigen::Vector2d d = b.centre - a.centre;
+  for (const Eigen::Vector2d& axis : {a.axis_forward, a.axis_side, b.axis_forward, b.axis_side}) {
+    const double ra = (a.half_length + margin) * std::abs(axis.dot(a.axis_forward)) +
+                      (a.half_width + margin) * std::abs(axis.dot(a.axis_side));
+    const double rb = (b.half_length + margin) * std::abs(axis.dot(b.axis_forward)) +
+                      (b.half_width + margin) * std::abs(axis.dot(b.axis_side));
+    if (std::abs(d.dot(axis)) > ra + rb) return false;
+  }
+  return true;
+}
+
+enum class MaterialKind { kRoad, kFacade, kBlotch, kCar };
+
+struct StaticMesh {
+  Mesh mesh;
+  MaterialKind material = MaterialKind::kBlotch;
+  Eigen::Vector3d color = Eigen::Vector3d::Constant(0.5);
+  uint64_t seed = 0;
+};
+
+enum class MotionType { kStanding = 0, kStraight = 1, kTurning = 2 };
+
+const char* MotionName(MotionType type) {
+  switch (type) {
+    case MotionType::kStanding: return "standing";
+    case MotionType::kStraight: return "straight";
+    case MotionType::kTurning: return "turning";
+  }
+  return "?";
+}
+
+struct SceneCar {
+  int track_id = 0;
+  const SynthCar* car = nullptr;
+  MotionType motion = MotionType::kStanding;
+  double speed = 0.0, yaw_rate = 0.0;
+  Eigen::Vector3d paint = Eigen::Vector3d::Constant(0.5);
+  std::string paint_name;
+  double length = 0, height = 0, width = 0;  // from the mesh bounds
+  double target_distance = 0.0;              // at the middle frame
+  std::vector<PlanarState> states;           // per frame, world frame
+};
+
+struct Scene {
+  std::vector<StaticMesh> statics;
+  std::vector<SceneCar> cars;
+  std::vector<Eigen::Isometry3d> world_from_camera;
+  double ego_speed = 0.0, ego_yaw_rate = 0.0;
+};
+
+Eigen::Isometry3d WorldFromObject(const PlanarState& state) {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = RotationY(state.heading);
+  t.translation() = state.position;
+  return t;
+}
+
+class Random {
+ public:
+  explicit Random(uint64_t seed) : engine_(seed) {}
+  double Uniform(double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(engine_); }
+  double Normal(double sigma) { return sigma > 0 ? std::normal_distribution<double>(0.0, sigma)(engine_) : 0.0; }
+  bool Bernoulli(double p) { return Uniform(0.0, 1.0) < p; }
+  int Index(int n) { return std::uniform_int_distribution<int>(0, n - 1)(engine_); }
+  std::mt19937_64& engine() { return engine_; }
+
+ private:
+  std::mt19937_64 engine_;
+};
+
+PinholeCamera MakeCamera(const SynthOptions& options) {
+  PinholeCamera camera;
+  camera.fx = camera.fy = options.focal_px;
+  camera.cx = options.cx_px;
+  camera.cy = options.cy_px;
+  camera.width = options.width;
+  camera.height = options.height;
+  return camera;
+}
+
+void AddBuildings(const SynthOptions& options, Random* rng, uint64_t seed, Scene* scene) {
+  const double h = options.camera_height;
+  static const Eigen::Vector3d kFacadeColors[] = {
+      {0.55, 0.25, 0.18}, {0.75, 0.66, 0.50}, {0.55, 0.55, 0.55}, {0.80, 0.72, 0.45},
+      {0.45, 0.30, 0.25}, {0.70, 0.70, 0.66}, {0.60, 0.45, 0.35}};
+  int building = 0;
+  for (int side : {-1, 1}) {
+    double z = -40.0;
+    while (z < 200.0) {
+      const double length = rng->Uniform(8.0, 25.0);
+      const double setback = rng->Uniform(kRoadHalfWidth + 2.0, kRoadHalfWidth + 4.5);
+      const double depth = rng->Uniform(6.0, 12.0);
+      const double height = rng->Uniform(5.0, 18.0);
+      const double x0 = side * setback, x1 = side * (setback + depth);
+      StaticMesh m;
+      m.mesh = MakeBoxMesh(Eigen::Vector3d(std::min(x0, x1), h - height, z),
+                           Eigen::Vector3d(std::max(x0, x1), h, z + length));
+      m.material = MaterialKind::kFacade;
+      m.color = kFacadeColors[rng->Index(int(std::size(kFacadeColors)))];
+      m.seed = Mix(seed, uint64_t(100 + building++));
+      scene->statics.push_back(std::move(m));
+      z += length + (rng->Bernoulli(0.5) ? 0.0 : rng->Uniform(1.0, 6.0));
+    }
+  }
+  // Backdrop across the far end of the street.
+  StaticMesh backdrop;
+  backdrop.mesh = MakeBoxMesh(Eigen::Vector3d(-70, h - 30.0, 200.0), Eigen::Vector3d(70, h, 206.0));
+  backdrop.material = MaterialKind::kFacade;
+  backdrop.color = Eigen::Vector3d(0.6, 0.6, 0.62);
+  backdrop.seed = Mix(seed, 99);
+  scene->statics.push_back(std::move(backdrop));
+  // Small boxes and poles on the sidewalks.
+  for (int i = 0; i < 14; ++i) {
+    const double side = rng->Bernoulli(0.5) ? 1.0 : -1.0;
+    const double x = side * rng->Uniform(kRoadHalfWidth + 0.4, kRoadHalfWidth + 1.6);
+    const double z = rng->Uniform(-10.0, 130.0);
+    Eigen::Vector3d size;
+    if (rng->Bernoulli(0.5)) {
+      const double s = rng->Uniform(0.4, 1.0);
+      size = Eigen::Vector3d(s, rng->Uniform(0.5, 1.2), s);
+    } else {
+      size = Eigen::Vector3d(0.14, rng->Uniform(2.5, 4.0), 0.14);
+    }
+    StaticMesh m;
+    m.mesh = MakeBoxMesh(Eigen::Vector3d(x - 0.5 * size.x(), h - size.y(), z - 0.5 * size.z()),
+                         Eigen::Vector3d(x + 0.5 * size.x(), h, z + 0.5 * size.z()));
+    m.material = MaterialKind::kBlotch;
+    m.color = Eigen::Vector3d(rng->Uniform(0.2, 0.8), rng->Uniform(0.2, 0.8), rng->Uniform(0.2, 0.8));
+    m.seed = Mix(seed, uint64_t(500 + i));
+    scene->statics.push_back(std::move(m));
+  }
+}
+
+Mesh MakeGroundMesh(double y) {
+  Mesh ground;
+  const double x0 = -80, x1 = 80, z0 = -60, z1 = 220;
+  ground.vertices = {Eigen::Vector3f(x0, y, z0), Eigen::Vector3f(x1, y, z0), Eigen::Vector3f(x1, y, z1),
+                     Eigen::Vector3f(x0, y, z1)};
+  ground.triangles = {Eigen::Vector3i(0, 2, 1), Eigen::Vector3i(0, 3, 2)};
+  return ground;
+}
+
+struct Paint {
+  const char* name;
+  Eigen::Vector3d color;
+};
+const Paint kPaints[] = {{"white", {0.82, 0.82, 0.80}}, {"silver", {0.55, 0.57, 0.60}},
+                         {"black", {0.05, 0.05, 0.06}}, {"red", {0.55, 0.05, 0.04}},
+                         {"blue", {0.06, 0.13, 0.45}},  {"grey", {0.25, 0.25, 0.27}},
+                         {"beige", {0.65, 0.58, 0.45}}, {"green", {0.08, 0.28, 0.15}}};
+
+// Tries to place one car; returns false when no admissible trajectory was found.
+bool PlaceCar(const SynthOptions& options, MotionType motion, double min_d, double max_d,
+              const Scene& scene, Random* rng, SceneCar* car) {
+  const int num_frames = options.num_frames;
+  const int middle = num_frames / 2;
+  const double dt = 1.0 / options.frame_rate_hz;
+  const PinholeCamera camera = MakeCamera(options);
+  const double tan_half_fov = std::min(camera.cx, camera.width - camera.cx) / camera.fx;
+  const Eigen::Isometry3d& world_from_middle = scene.world_from_camera[middle];
+  for (int attempt = 0; attempt < 400; ++attempt) {
+    const double d = rng->Uniform(min_d, max_d);
+    const double max_x = d * std::sin(0.85 * std::atan(tan_half_fov));
+    const double x_c = rng->Uniform(-max_x, max_x);
+    const double z_c = std::sqrt(std::max(d * d - x_c * x_c, 1e-6));
+    PlanarState middle_state;
+    middle_state.position =
+        world_from_middle * Eigen::Vector3d(x_c, options.camera_height, z_c);
+    middle_state.position.y() = options.camera_height;
+    if (std::abs(middle_state.position.x()) > kMaxCarCentreX) continue;
+    const double along = rng->Bernoulli(0.5) ? -0.5 * kPi : 0.5 * kPi;  // same way / oncoming
+    double speed = 0.0, yaw_rate = 0.0;
+    switch (motion) {
+      case MotionType::kStanding:
+        middle_state.heading = rng->Bernoulli(0.65) ? along + rng->Normal(6.0 * kPi / 180.0)
+                                                    : rng->Uniform(-kPi, kPi);
+        break;
+      case MotionType::kStraight:
+        speed = rng->Uniform(options.min_speed, options.max_speed);
+        if (rng->Bernoulli(0.8)) {
+          middle_state.heading = along + rng->Normal(3.0 * kPi / 180.0);
+        } else {  // crossing, slower
+          speed = std::min(speed, rng->Uniform(options.min_speed, options.min_speed + 2.0));
+          middle_state.heading = (rng->Bernoulli(0.5) ? 0.0 : kPi) + rng->Normal(10.0 * kPi / 180.0);
+        }
+        break;
+      case MotionType::kTurning:
+        speed = rng->Uniform(options.min_turn_speed, options.max_turn_speed);
+        yaw_rate = rng->Uniform(options.min_yaw_rate, options.max_yaw_rate) *
+                   (rng->Bernoulli(0.5) ? 1.0 : -1.0);
+        middle_state.heading = along + rng->Uniform(-25.0, 25.0) * kPi / 180.0;
+        break;
+    }
+    middle_state.heading = WrapAngle(middle_state.heading);
+    std::vector<PlanarState> states(num_frames);
+    bool ok = true;
+    int frames_in_view = 0;
+    for (int t = 0; t < num_frames && ok; ++t) {
+      states[t] = Advance(middle_state, speed, yaw_rate, (t - middle) * dt);
+      states[t].heading = WrapAngle(states[t].heading);
+      const PlanarState& s = states[t];
+      if (std::abs(s.position.x()) > kMaxCarCentreX) ok = false;
+      // Clear of the ego car (its body from 2 m ahead to 2.6 m behind the camera).
+      const Eigen::Isometry3d& wc = scene.world_from_camera[t];
+      const Eigen::Vector3d ego_forward = wc.linear() * Eigen::Vector3d::UnitZ();
+      const double ego_heading = std::atan2(-ego_forward.z(), ego_forward.x());
+      const GroundBox ego = MakeGroundBox(wc.translation() - 0.3 * ego_forward, ego_heading, 4.6, 1.9);
+      const GroundBox self = MakeGroundBox(s.position, s.heading, car->length, car->width);
+      if (Overlap(ego, self, 1.0)) ok = false;
+      for (const SceneCar& other : scene.cars) {
+        const PlanarState& o = other.states[t];
+        if (Overlap(MakeGroundBox(o.position, o.heading, other.length, other.width), self, 0.4)) ok = false;
+      }
+      const Eigen::Vector3d centre_in_camera =
+          wc.inverse() * (s.position - Eigen::Vector3d(0, 0.5 * car->height, 0));
+      if (centre_in_camera.z() > 2.0 && camera.Contains(camera.Project(centre_in_camera))) ++frames_in_view;
+    }
+    if (!ok || frames_in_view < (7 * num_frames + 9) / 10) continue;
+    car->motion = motion;
+    car->speed = speed;
+    car->yaw_rate = yaw_rate;
+    car->target_distance = d;
+    car->states = std::move(states);
+    return true;
+  }
+  return false;
+}
+
+Scene MakeScene(const SynthOptions& options, const std::vector<SynthCar>& cars, int sequence_index,
+                int* global_car_index) {
+  const uint64_t seed = Mix(options.seed, uint64_t(sequence_index));
+  Random rng(seed);
+  Scene scene;
+  const double dt = 1.0 / options.frame_rate_hz;
+  scene.ego_speed = rng.Uniform(options.min_ego_speed, options.max_ego_speed);
+  scene.ego_yaw_rate = rng.Uniform(-options.max_ego_yaw_rate, options.max_ego_yaw_rate);
+  PlanarState ego;  // the camera's forward is the ego heading -pi/2 (world +z)
+  ego.heading = -0.5 * kPi;
+  for (int t = 0; t < options.num_frames; ++t) {
+    const PlanarState s = Advance(ego, scene.ego_speed, scene.ego_yaw_rate, t * dt);
+    Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
+    world_from_camera.linear() = RotationY(s.heading + 0.5 * kPi);
+    world_from_camera.translation() = s.position;
+    scene.world_from_camera.push_back(world_from_camera);
+  }
+  StaticMesh road;
+  road.mesh = MakeGroundMesh(options.camera_height);
+  road.material = MaterialKind::kRoad;
+  road.seed = Mix(seed, 1);
+  scene.statics.push_back(std::move(road));
+  AddBuildings(options, &rng, seed, &scene);
+
+  std::vector<int> order(cars.size());
+  for (size_t i = 0; i < order.size(); ++i) order[i] = int(i);
+  std::shuffle(order.begin(), order.end(), rng.engine());
+  const double split = std::clamp(20.0, options.min_distance, options.max_distance);
+  for (int k = 0; k < options.cars_per_sequence; ++k) {
+    const int g = (*global_car_index)++;
+    SceneCar car;
+    car.track_id = k;
+    car.car = &cars[order[k % order.size()]];
+    const AlignedBox bounds = car.car->mesh.Bounds();
+    car.length = bounds.Size().x();
+    car.height = bounds.Size().y();
+    car.width = bounds.Size().z();
+    const Paint& paint = kPaints[rng.Index(int(std::size(kPaints)))];
+    car.paint = paint.color;
+    car.paint_name = paint.name;
+    const MotionType motion = MotionType(g % 3);
+    const bool near = ((g / 3) % 2) == 0;
+    const double lo = near ? options.min_distance : split;
+    const double hi = near ? split : options.max_distance;
+    bool placed = PlaceCar(options, motion, lo, hi, scene, &rng, &car);
+    if (!placed) placed = PlaceCar(options, motion, options.min_distance, options.max_distance, scene, &rng, &car);
+    if (!placed) placed = PlaceCar(options, MotionType::kStanding, options.min_distance,
+                                   options.max_distance, scene, &rng, &car);
+    if (!placed) {
+      LogWarning() << "synth: sequence " << sequence_index << ": no free place for car " << k
+                   << " (" << car.car->name << "); the sequence has fewer cars";
+      continue;
+    }
+    car.track_id = int(scene.cars.size());
+    scene.cars.push_back(std::move(car));
+  }
+  return scene;
+}
+
+// Shading of one rendered view into an 8-bit BGR image (for cv::imwrite).
+cv::Mat ShadeView(const SynthOptions& options, const Scene& scene, int frame,
+                  const Eigen::Isometry3d& world_from_camera, const PinholeCamera& camera,
+                  const RenderBuffers& buffers, uint64_t noise_seed) {
+  const Eigen::Vector3d sun = Eigen::Vector3d(-0.35, -1.0, -0.5).normalized();  // towards the sun
+  const Eigen::Matrix3d rotation = world_from_camera.linear();
+  std::vector<Eigen::Isometry3d> object_from_world(scene.cars.size());
+  for (size_t c = 0; c < scene.cars.size(); ++c) {
+    object_from_world[c] = WorldFromObject(scene.cars[c].states[frame]).inverse();
+  }
+  const int num_statics = int(scene.statics.size());
+  cv::Mat image(camera.height, camera.width, CV_8UC3);
+  // Rows in parallel; each row has its own noise stream, so the result does not
+  // depend on the scheduling.
+  tbb::parallel_for(0, camera.height, [&](int v) {
+    std::mt19937_64 noise_engine(Mix(noise_seed, uint64_t(v)));
+    std::normal_distribution<double> noise(0.0, 1.0);
+    for (int u = 0; u < camera.width; ++u) {
+      const size_t pixel = size_t(v) * camera.width + u;
+      const int index = buffers.mesh_index[pixel];
+      Eigen::Vector3d radiance;
+      if (index < 0) {
+        radiance = Eigen::Vector3d(0.70, 0.80, 0.95) * (1.0 - 0.25 * double(v) / camera.height);
+      } else {
+        const Eigen::Vector3d ray = camera.Ray(u, v);
+        const Eigen::Vector3d point_in_camera = ray * double(buffers.depth[pixel]);
+        const Eigen::Vector3d point = world_from_camera * point_in_camera;
+        const Eigen::Vector3d normal = rotation * buffers.normal[pixel].cast<double>();
+        const Eigen::Vector3d view = -(rotation * ray.normalized());  // towards the camera
+        const double cos_incidence = std::max(0.2, std::abs(normal.dot(view)));
+        const double footprint = buffers.depth[pixel] * ray.norm() / camera.fx / cos_incidence;
+        const double diffuse = std::max(0.0, normal.dot(sun));
+        if (index >= num_statics) {
+          const SceneCar& car = scene.cars[index - num_statics];
+          const Eigen::Vector3d p_object = object_from_world[index - num_statics] * point;
+          Eigen::Vector3d albedo = car.paint;
+          double specular_strength = 0.35;
+          if (p_object.y() > -0.30) {  // tyres, bumpers, underbody
+            albedo = Eigen::Vector3d(0.04, 0.04, 0.045);
+            specular_strength = 0.05;
+          } else if (p_object.y() < -0.62 * car.height && normal.y() > -0.9) {  // windows
+            albedo = Eigen::Vector3d(0.06, 0.07, 0.09);
+            specular_strength = 0.6;
+          }
+          const Eigen::Vector3d half = (sun + view).normalized();
+          const double specular = specular_strength * std::pow(std::max(0.0, normal.dot(half)), 40.0);
+          radiance = albedo * (0.3 + 0.7 * diffuse) + Eigen::Vector3d::Constant(specular);
+        } else {
+          const StaticMesh& m = scene.statics[index];
+          Eigen::Vector3d albedo;
+          switch (m.material) {
+            case MaterialKind::kRoad:
+              albedo = procedural::RoadAlbedo(point, kRoadHalfWidth, kLaneWidth, footprint, m.seed);
+              break;
+            case MaterialKind::kFacade:
+              if (std::abs(normal.y()) > 0.7) {
+                albedo = procedural::BlotchAlbedo(point, m.color, footprint, m.seed);
+              } else {
+                const double along = std::abs(normal.x()) > std::abs(normal.z()) ? point.z() : point.x();
+                albedo = procedural::FacadeAlbedo(along, options.camera_height - point.y(), m.color,
+                                                  footprint, m.seed);
+              }
+              break;
+            default:
+              albedo = procedural::BlotchAlbedo(point, m.color, footprint, m.seed);
+              break;
+          }
+          radiance = albedo * (0.4 + 0.7 * diffuse);
+        }
+      }
+      cv::Vec3b& out = image.at<cv::Vec3b>(v, u);
+      for (int c = 0; c < 3; ++c) {
+        const double value = 255.0 * std::pow(std::clamp(radiance[c], 0.0, 1.0), 1.0 / 2.2) +
+                             options.image_noise_sigma * noise(noise_engine);
+        out[2 - c] = cv::saturate_cast<uint8_t>(std::lround(value));
+      }
+    }
+  });
+  return image;
+}
+
+void WriteImage(const std::string& path, const cv::Mat& image) {
+  WriteFileAtomically(path, [&](const std::string& temporary) {
+    SAMP_CHECK(cv::imwrite(temporary, image)) << "cannot write image " << path;
+  });
+}
+
+std::string FrameFile(const std::string& seq, int frame, const char* extension) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%s_%02d%s", seq.c_str(), frame, extension);
+  return buffer;
+}
+
+// The 3D box label of a car in the camera of one frame, 2D box from its projected vertices.
+// Returns false when no vertex lies in front of the camera or the box misses the image.
+bool MakeLabel(const SceneCar& car, int frame, const Eigen::Isometry3d& camera_from_world,
+               const PinholeCamera& camera, ObjectLabel* label) {
+  const Eigen::Isometry3d camera_from_object =
+      camera_from_world * WorldFromObject(car.states[frame]);
+  AlignedBox box;
+  for (const Eigen::Vector3f& vertex : car.car->mesh.vertices) {
+    const Eigen::Vector3d p = camera_from_object * vertex.cast<double>();
+    if (p.z() < 0.1) continue;
+    const Eigen::Vector2d uv = camera.Project(p);
+    box.Extend(Eigen::Vector3d(uv.x(), uv.y(), 0.0));
+  }
+  if (box.IsEmpty()) return false;
+  const double x1 = std::clamp(box.min.x(), 0.0, camera.width - 1.0);
+  const double y1 = std::clamp(box.min.y(), 0.0, camera.height - 1.0);
+  const double x2 = std::clamp(box.max.x(), 0.0, camera.width - 1.0);
+  const double y2 = std::clamp(box.max.y(), 0.0, camera.height - 1.0);
+  if (x2 <= x1 || y2 <= y1) return false;
+  const double full_area = std::max(1e-9, (box.max.x() - box.min.x()) * (box.max.y() - box.min.y()));
+  label->frame = frame;
+  label->track_id = car.track_id;
+  label->type = "Car";
+  label->truncation = std::clamp(1.0 - (x2 - x1) * (y2 - y1) / full_area, 0.0, 1.0);
+  label->occlusion = 0;
+  label->box_2d = Eigen::Vector4d(x1, y1, x2, y2);
+  label->height = car.height;
+  label->width = car.width;
+  label->length = car.length;
+  label->position = camera_from_object.translation();
+  const Eigen::Vector3d x_axis = camera_from_object.linear().col(0);
+  label->rotation_y = std::atan2(-x_axis.z(), x_axis.x());
+  label->alpha = WrapAngle(label->rotation_y - std::atan2(label->position.x(), label->position.z()));
+  label->score = 1.0;
+  return true;
+}
+
+ObjectLabel NoisyDetection(const SynthOptions& options, const ObjectLabel& truth,
+                           const PinholeCamera& camera, Random* rng) {
+  ObjectLabel det = truth;
+  det.frame = -1;
+  det.track_id = -1;
+  const Eigen::Vector3d p = truth.position;
+  const double d = p.norm();
+  const Eigen::Vector3d ray = Eigen::Vector3d(p.x(), 0.0, p.z()).normalized();
+  const Eigen::Vector3d lateral(ray.z(), 0.0, -ray.x());
+  det.position = p + ray * rng->Normal(options.det_depth_sigma_a + options.det_depth_sigma_b * d * d) +
+                 lateral * rng->Normal(options.det_lateral_sigma_a + options.det_lateral_sigma_b * d) +
+                 Eigen::Vector3d(0.0, rng->Normal(options.det_height_sigma), 0.0);
+  if (det.position.z() < 0.5) det.position.z() = 0.5;  // never behind the camera
+  double yaw = truth.rotation_y +
+               rng->Normal((options.det_yaw_sigma_deg_a + options.det_yaw_sigma_deg_b * d) * kPi / 180.0);
+  if (rng->Bernoulli(options.det_flip_probability)) yaw += kPi;
+  det.rotation_y = WrapAngle(yaw);
+  det.height = truth.height * std::max(0.5, 1.0 + rng->Normal(options.det_size_sigma));
+  det.width = truth.width * std::max(0.5, 1.0 + rng->Normal(options.det_size_sigma));
+  det.length = truth.length * std::max(0.5, 1.0 + rng->Normal(options.det_size_sigma));
+  Eigen::Vector4d b = truth.box_2d;
+  for (int i = 0; i < 4; ++i) b[i] += rng->Normal(options.det_box_sigma_px);
+  b[0] = std::clamp(b[0], 0.0, camera.width - 2.0);
+  b[1] = std::clamp(b[1], 0.0, camera.height - 2.0);
+  b[2] = std::clamp(b[2], b[0] + 1.0, camera.width - 1.0);
+  b[3] = std::clamp(b[3], b[1] + 1.0, camera.height - 1.0);
+  det.box_2d = b;
+  det.alpha = WrapAngle(det.rotation_y - std::atan2(det.position.x(), det.position.z()));
+  det.score = std::clamp(0.97 - 0.008 * d + rng->Normal(0.03), 0.05, 1.0);
+  return det;
+}
+
+cv::Mat TrueDisparityWithNoise(const SynthOptions& options, const RenderBuffers& left,
+                               int num_statics, uint64_t noise_seed) {
+  Random rng(noise_seed);
+  const double fb = options.focal_px * options.baseline;
+  cv::Mat disparity(left.height, left.width, CV_32FC1, cv::Scalar(0.f));
+  for (int v = 0; v < left.height; ++v) {
+    for (int u = 0; u < left.width; ++u) {
+      const size_t pixel = size_t(v) * left.width + u;
+      const float z = left.depth[pixel];
+      if (!std::isfinite(z) || z <= 0.f) continue;
+      const double truth = fb / z;
+      double value;
+      const double draw = rng.Uniform(0.0, 1.0);
+      if (draw < options.invalid_fraction) {
+        value = 0.0;
+      } else if (draw < options.invalid_fraction + options.outlier_fraction) {
+        value = rng.Uniform(0.5, std::min(255.0, std::max(2.0, 2.0 * truth)));
+      } else {
+        const bool on_car = left.mesh_index[pixel] >= num_statics;
+        value = truth + rng.Normal(on_car ? options.car_disparity_sigma_px : options.disparity_sigma_px);
+      }
+      if (value < 0.5 || value >= 255.9) value = 0.0;  // below 0.5 px: invalid (z > 770 m)
+      disparity.at<float>(v, u) = float(value);
+    }
+  }
+  return disparity;
+}
+
+SynthSequenceInfo WriteSequence(const SynthOptions& options, const Scene& scene, int sequence_index,
+                                Progress* progress) {
+  const PinholeCamera camera = MakeCamera(options);
+  SynthSequenceInfo info;
+  char name[16];
+  std::snprintf(name, sizeof(name), "%06d", options.first_sequence + sequence_index);
+  info.name = name;
+  info.folder = (fs::path(options.output_folder) / info.name).string();
+  info.num_cars = int(scene.cars.size());
+  const std::string seq = info.name;
+  const fs::path root(info.folder);
+  const uint64_t seed = Mix(options.seed, uint64_t(sequence_index));
+
+  StereoCalibration calibration;
+  calibration.camera = camera;
+  calibration.baseline = options.baseline;
+  WriteCalibration((root / "calib" / (seq + ".txt")).string(), calibration);
+  WritePoses((root / "poses" / (seq + ".txt")).string(), scene.world_from_camera);
+
+  // Ground-truth meshes (object frame) and car descriptions.
+  nlohmann::json cars_json = nlohmann::json::array();
+  for (const SceneCar& car : scene.cars) {
+    WritePly((root / "gt" / "meshes" / ("track_" + std::to_string(car.track_id) + ".ply")).string(),
+             car.car->mesh);
+    cars_json.push_back({{"track_id", car.track_id},
+                         {"car", car.car->name},
+                         {"motion", MotionName(car.motion)},
+                         {"speed", car.speed},
+                         {"yaw_rate", car.yaw_rate},
+                         {"paint", car.paint_name},
+                         {"length", car.length},
+                         {"height", car.height},
+                         {"width", car.width},
+                         {"distance_at_middle_frame", car.target_distance}});
+  }
+
+  std::vector<PlacedMesh> placed(scene.statics.size() + scene.cars.size());
+  const int num_statics = int(scene.statics.size());
+  std::vector<ObjectLabel> gt_labels;
+  StereoOptions stereo_options;
+  for (int t = 0; t < options.num_frames; ++t) {
+    const Eigen::Isometry3d camera_from_world = scene.world_from_camera[t].inverse();
+    Eigen::Isometry3d right_from_left = Eigen::Isometry3d::Identity();
+    right_from_left.translation() = Eigen::Vector3d(-options.baseline, 0.0, 0.0);
+    std::vector<PlacedMesh> right(placed.size());
+    for (int i = 0; i < num_statics; ++i) {
+      placed[i].mesh = &scene.statics[i].mesh;
+      placed[i].camera_from_object = camera_from_world;
+    }
+    for (size_t c = 0; c < scene.cars.size(); ++c) {
+      placed[num_statics + c].mesh = &scene.cars[c].car->mesh;
+      placed[num_statics + c].camera_from_object =
+          camera_from_world * WorldFromObject(scene.cars[c].states[t]);
+    }
+    for (size_t i = 0; i < placed.size(); ++i) {
+      right[i].mesh = placed[i].mesh;
+      right[i].camera_from_object = right_from_left * placed[i].camera_from_object;
+    }
+    const RenderBuffers left_buffers = Render(camera, placed);
+    const RenderBuffers right_buffers = Render(camera, right);
+    const cv::Mat left_image = ShadeView(options, scene, t, scene.world_from_camera[t], camera,
+                                         left_buffers, Mix(seed, uint64_t(1000 + 2 * t)));
+    const cv::Mat right_image =
+        ShadeView(options, scene, t, scene.world_from_camera[t] * right_from_left.inverse(), camera,
+                  right_buffers, Mix(seed, uint64_t(1001 + 2 * t)));
+    WriteImage((root / "image_2" / FrameFile(seq, t, ".png")).string(), left_image);
+    WriteImage((root / "image_3" / FrameFile(seq, t, ".png")).string(), right_image);
+
+    // Ground truth: depth (uint16, 1/256 m) and object map (uint8, track_id + 1).
+    cv::Mat depth(camera.height, camera.width, CV_16UC1, cv::Scalar(0));
+    cv::Mat object_map(camera.height, camera.width, CV_8UC1, cv::Scalar(0));
+    std::vector<int> visible(scene.cars.size(), 0);
+    for (int v = 0; v < camera.height; ++v) {
+      for (int u = 0; u < camera.width; ++u) {
+        const size_t pixel = size_t(v) * camera.width + u;
+        const float z = left_buffers.depth[pixel];
+        if (std::isfinite(z) && z > 0.f && z < 255.99f) {
+          depth.at<uint16_t>(v, u) = uint16_t(std::lround(double(z) * 256.0));
+        }
+        const int index = left_buffers.mesh_index[pixel];
+        if (index >= num_statics) {
+          const int car = index - num_statics;
+          object_map.at<uint8_t>(v, u) = uint8_t(scene.cars[car].track_id + 1);
+          ++visible[car];
+        }
+      }
+    }
+    WriteImage((root / "gt" / "depth" / FrameFile(seq, t, ".png")).string(), depth);
+    WriteImage((root / "gt" / "obj_map" / FrameFile(seq, t, ".png")).string(), object_map);
+
+    cv::Mat disparity;
+    if (options.disparity == DisparitySource::kStereoSgbm) {
+      disparity = ComputeDisparity(left_image, right_image, stereo_options);
+    } else {
+      disparity = TrueDisparityWithNoise(options, left_buffers, num_statics,
+                                         Mix(seed, uint64_t(3000 + t)));
+    }
+    WriteDisparity((root / "disparity" / FrameFile(seq, t, ".png")).string(), disparity);
+    WritePlane((root / "planes" / FrameFile(seq, t, ".txt")).string(),
+               Eigen::Vector4d(0.0, -1.0, 0.0, options.camera_height));
+
+    Random detection_rng(Mix(seed, uint64_t(5000 + t)));
+    std::vector<ObjectLabel> detections;
+    for (size_t c = 0; c < scene.cars.size(); ++c) {
+      ObjectLabel truth;
+      if (visible[c] == 0 || !MakeLabel(scene.cars[c], t, camera_from_world, camera, &truth)) continue;
+      gt_labels.push_back(truth);
+      // Draw the noise for every visible car so that misses do not shift later draws.
+      const bool missed = detection_rng.Bernoulli(options.det_miss_probability);
+      const ObjectLabel det = NoisyDetection(options, truth, camera, &detection_rng);
+      if (visible[c] < options.det_min_pixels || missed) continue;
+      detections.push_back(det);
+    }
+    info.num_detections += int(detections.size());
+    WriteLabels((root / "detections" / FrameFile(seq, t, ".txt")).string(), detections);
+    if (progress) progress->Tick();
+  }
+  info.num_gt_labels = int(gt_labels.size());
+  WriteTrackingLabels((root / "gt" / "label_02" / (seq + ".txt")).string(), gt_labels);
+  nlohmann::json scene_json = {{"sequence", seq},
+                               {"seed", options.seed},
+                               {"ego_speed", scene.ego_speed},
+                               {"ego_yaw_rate", scene.ego_yaw_rate},
+                               {"frame_rate_hz", options.frame_rate_hz},
+                               {"num_frames", options.num_frames},
+                               {"depth_png", "uint16, depth_m = value / 256, 0 = no surface"},
+                               {"obj_map_png", "uint8, 0 = background, track_id + 1 = car"},
+                               {"cars", cars_json}};
+  WriteTextFileAtomically((root / "gt" / "cars.json").string(), scene_json.dump(2) + "\n");
+  return info;
+}
+
+std::string Lower(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+}  // namespace
+
+void SynthCarSource::Check() const {
+  SAMP_CHECK(!cad_folder.empty() || !canonical_meshes.empty())
+      << "synth: give a CAD folder or canonical meshes (cad_folder and canonical_meshes are both empty)";
+  SAMP_CHECK(manifest_path.empty() || !cad_folder.empty())
+      << "synth: manifest_path needs cad_folder";
+}
+
+std::vector<SynthCar> LoadSynthCars(const SynthCarSource& source) {
+  source.Check();
+  std::vector<SynthCar> cars;
+  std::set<std::string> wanted;
+  for (const std::string& name : source.only) wanted.insert(Lower(name));
+  std::set<std::string> found;
+  if (!source.cad_folder.empty()) {
+    SAMP_CHECK(fs::is_directory(source.cad_folder)) << "synth: CAD folder " << source.cad_folder
+                                                    << " does not exist";
+    Manifest manifest;
+    if (!source.manifest_path.empty()) manifest = LoadManifest(source.manifest_path);
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::recursive_directory_iterator(source.cad_folder)) {
+      if (entry.is_regular_file() && IsMeshFile(entry.path().string())) files.push_back(entry.path());
+    }
+    std::sort(files.begin(), files.end());
+    for (const fs::path& file : files) {
+      const std::string relative = fs::relative(file, source.cad_folder).generic_string();
+      const ManifestEntry* entry = manifest.Find(relative);
+      const std::string name = entry && !entry->name.empty() ? entry->name : file.stem().string();
+      const bool selected = wanted.empty() || wanted.count(Lower(name)) ||
+                            wanted.count(Lower(file.stem().string()));
+      if (!selected) continue;
+      if (entry && entry->skip && !(source.ignore_skip_for_only && !wanted.empty())) {
+        LogDebug() << "synth: skipping " << relative << " (manifest: " << entry->skip_reason << ")";
+        continue;
+      }
+      const CanonicalizeOptions& canonicalize = entry ? entry->canonicalize : manifest.defaults;
+      const CanonicalizeResult result = Canonicalize(LoadMesh(file.string()), canonicalize);
+      for (const std::string& warning : result.warnings) {
+        LogWarning() << "synth: " << relative << ": " << warning;
+      }
+      cars.push_back({name, result.mesh});
+      found.insert(Lower(name));
+      found.insert(Lower(file.stem().string()));
+    }
+  }
+  for (const std::string& path : source.canonical_meshes) {
+    SynthCar car{fs::path(path).stem().string(), LoadMesh(path)};
+    const Eigen::Vector3d size = car.mesh.Bounds().Size();
+    SAMP_CHECK(size.x() > 1.0 && size.x() < 10.0 && size.y() > 0.5 && size.z() > 0.5)
+        << "synth: " << path << " does not look like a canonical car (extent " << size.transpose()
+        << " m; expected x = length, y = height, z = width in metres)";
+    found.insert(Lower(car.name));
+    cars.push_back(std::move(car));
+  }
+  for (const std::string& name : wanted) {
+    SAMP_CHECK(found.count(name)) << "synth: car '" << name << "' was not found in "
+                                  << source.cad_folder;
+  }
+  SAMP_CHECK(!cars.empty()) << "synth: no car to use (all skipped or none found)";
+  std::sort(cars.begin(), cars.end(), [](const SynthCar& a, const SynthCar& b) { return a.name < b.name; });
+  return cars;
+}
+
+void SynthOptions::Check() const {
+  SAMP_CHECK(!output_folder.empty()) << "synth: output_folder is empty";
+  SAMP_CHECK(num_sequences >= 1) << "synth: num_sequences must be >= 1";
+  SAMP_CHECK(first_sequence >= 0 && first_sequence + num_sequences <= 1000000)
+      << "synth: first_sequence must be in [0, 999999 - num_sequences]";
+  SAMP_CHECK(cars_per_sequence >= 1 && cars_per_sequence <= 20) << "synth: cars_per_sequence must be in [1, 20]";
+  SAMP_CHECK(num_frames >= 1 && num_frames <= 100) << "synth: num_frames must be in [1, 100]";
+  SAMP_CHECK(frame_rate_hz > 0) << "synth: frame_rate_hz must be > 0";
+  SAMP_CHECK(width >= 32 && height >= 32) << "synth: image size must be at least 32 x 32";
+  SAMP_CHECK(focal_px > 0 && baseline > 0) << "synth: focal_px and baseline must be > 0";
+  SAMP_CHECK(cx_px > 0 && cx_px < width && cy_px > 0 && cy_px < height)
+      << "synth: the principal point must lie inside the image";
+  SAMP_CHECK(camera_height > 0.5) << "synth: camera_height must be > 0.5 m";
+  SAMP_CHECK(min_distance >= 4.0 && max_distance > min_distance && max_distance <= 150.0)
+      << "synth: need 4 <= min_distance < max_distance <= 150";
+  SAMP_CHECK(min_speed > 0 && max_speed >= min_speed) << "synth: need 0 < min_speed <= max_speed";
+  SAMP_CHECK(min_turn_speed > 0 && max_turn_speed >= min_turn_speed)
+      << "synth: need 0 < min_turn_speed <= max_turn_speed";
+  SAMP_CHECK(min_yaw_rate > 0 && max_yaw_rate >= min_yaw_rate)
+      << "synth: need 0 < min_yaw_rate <= max_yaw_rate";
+  SAMP_CHECK(min_ego_speed >= 0 && max_ego_speed >= min_ego_speed)
+      << "synth: need 0 <= min_ego_speed <= max_ego_speed";
+  SAMP_CHECK(max_ego_yaw_rate >= 0) << "synth: max_ego_yaw_rate must be >= 0";
+  SAMP_CHECK(image_noise_sigma >= 0) << "synth: image_noise_sigma must be >= 0";
+  SAMP_CHECK(disparity_sigma_px >= 0 && car_disparity_sigma_px >= 0)
+      << "synth: disparity noise must be >= 0";
+  SAMP_CHECK(invalid_fraction >= 0 && outlier_fraction >= 0 && invalid_fraction + outlier_fraction <= 1)
+      << "synth: invalid_fraction and outlier_fraction must be >= 0 with sum <= 1";
+  SAMP_CHECK(det_depth_sigma_a >= 0 && det_depth_sigma_b >= 0 && det_lateral_sigma_a >= 0 &&
+             det_lateral_sigma_b >= 0 && det_height_sigma >= 0 && det_yaw_sigma_deg_a >= 0 &&
+             det_yaw_sigma_deg_b >= 0 && det_size_sigma >= 0 && det_box_sigma_px >= 0)
+      << "synth: detection noise parameters must be >= 0";
+  SAMP_CHECK(det_flip_probability >= 0 && det_flip_probability <= 1 && det_miss_probability >= 0 &&
+             det_miss_probability <= 1)
+      << "synth: det_flip_probability and det_miss_probability must be in [0, 1]";
+  SAMP_CHECK(det_min_pixels >= 0) << "synth: det_min_pixels must be >= 0";
+}
+
+std::string SynthOptions::ToJson() const {
+  nlohmann::json j = {
+      {"seed", seed},
+      {"num_sequences", num_sequences},
+      {"first_sequence", first_sequence},
+      {"cars_per_sequence", cars_per_sequence},
+      {"num_frames", num_frames},
+      {"frame_rate_hz", frame_rate_hz},
+      {"width", width},
+      {"height", height},
+      {"focal_px", focal_px},
+      {"cx_px", cx_px},
+      {"cy_px", cy_px},
+      {"baseline", baseline},
+      {"camera_height", camera_height},
+      {"min_distance", min_distance},
+      {"max_distance", max_distance},
+      {"min_speed", min_speed},
+      {"max_speed", max_speed},
+      {"min_turn_speed", min_turn_speed},
+      {"max_turn_speed", max_turn_speed},
+      {"min_yaw_rate", min_yaw_rate},
+      {"max_yaw_rate", max_yaw_rate},
+      {"min_ego_speed", min_ego_speed},
+      {"max_ego_speed", max_ego_speed},
+      {"max_ego_yaw_rate", max_ego_yaw_rate},
+      {"image_noise_sigma", image_noise_sigma},
+      {"disparity", disparity == DisparitySource::kStereoSgbm ? "sgbm" : "true+noise"},
+      {"disparity_sigma_px", disparity_sigma_px},
+      {"car_disparity_sigma_px", car_disparity_sigma_px},
+      {"invalid_fraction", invalid_fraction},
+      {"outlier_fraction", outlier_fraction},
+      {"det_depth_sigma_a", det_depth_sigma_a},
+      {"det_depth_sigma_b", det_depth_sigma_b},
+      {"det_lateral_sigma_a", det_lateral_sigma_a},
+      {"det_lateral_sigma_b", det_lateral_sigma_b},
+      {"det_height_sigma", det_height_sigma},
+      {"det_yaw_sigma_deg_a", det_yaw_sigma_deg_a},
+      {"det_yaw_sigma_deg_b", det_yaw_sigma_deg_b},
+      {"det_flip_probability", det_flip_probability},
+      {"det_miss_probability", det_miss_probability},
+      {"det_size_sigma", det_size_sigma},
+      {"det_box_sigma_px", det_box_sigma_px},
+      {"det_min_pixels", det_min_pixels}};
+  return j.dump(2);
+}
+
+std::string SynthSummary::BriefReport() const {
+  std::ostringstream out;
+  out << "synth: " << sequences.size() << " sequences, " << num_tracks << " tracks (" << num_standing
+      << " standing, " << num_straight << " straight, " << num_turning << " turning)";
+  int detections = 0, labels = 0;
+  for (const SynthSequenceInfo& s : sequences) {
+    detections += s.num_detections;
+    labels += s.num_gt_labels;
+  }
+  out << ", " << labels << " visible car-frames, " << detections << " detections, "
+      << Progress::FormatDuration(seconds);
+  return out.str();
+}
+
+SynthSummary SynthesizeSequences(const SynthOptions& options, const std::vector<SynthCar>& cars) {
+  options.Check();
+  SAMP_CHECK(!cars.empty()) << "synth: no cars given";
+  for (const SynthCar& car : cars) {
+    SAMP_CHECK(!car.mesh.Empty()) << "synth: car " << car.name << " has an empty mesh";
+  }
+  const auto start = std::chrono::steady_clock::now();
+  LogInfo() << "synth: seed " << options.seed << ", " << options.num_sequences << " sequences of "
+            << options.num_frames << " frames, " << cars.size() << " cars available, disparity "
+            << (options.disparity == DisparitySource::kStereoSgbm ? "StereoSGBM" : "true + noise");
+  nlohmann::json config = nlohmann::json::parse(options.ToJson());
+  nlohmann::json names = nlohmann::json::array();
+  for (const SynthCar& car : cars) names.push_back(car.name);
+  config["cars"] = names;
+  WriteTextFileAtomically((fs::path(options.output_folder) / "config.json").string(), config.dump(2) + "\n");
+
+  SynthSummary summary;
+  Progress progress("synth frames", int64_t(options.num_sequences) * options.num_frames,
+                    options.show_progress);
+  int global_car_index = 0;
+  for (int i = 0; i < options.num_sequences; ++i) {
+    const Scene scene = MakeScene(options, cars, i, &global_car_index);
+    summary.sequences.push_back(WriteSequence(options, scene, i, &progress));
+    for (const SceneCar& car : scene.cars) {
+      ++summary.num_tracks;
+      if (car.motion == MotionType::kStanding) ++summary.num_standing;
+      if (car.motion == MotionType::kStraight) ++summary.num_straight;
+      if (car.motion == MotionType::kTurning) ++summary.num_turning;
+    }
+  }
+  progress.Finish();
+  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return summary;
+}
+
+}  // namespace samp

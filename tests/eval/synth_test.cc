@@ -1,0 +1,153 @@
+// Synthesis: determinism by seed, the sequence layout `samp fit` reads, ground
+// truth consistent with itself (evaluating the true meshes at the true poses
+// gives perfect scores), and the baselines of the evaluation.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+
+#include "libsamp/core/error.h"
+#include "libsamp/eval/evaluation.h"
+#include "libsamp/eval/synth.h"
+#include "libsamp/fit/kitti_io.h"
+#include "libsamp/fit/sequence.h"
+#include "tests/eval/test_scene.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::map<std::string, std::string> ReadTree(const std::string& root) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(root)) {
+    if (!entry.is_regular_file()) continue;
+    std::ifstream in(entry.path(), std::ios::binary);
+    files[fs::relative(entry.path(), root).generic_string()] =
+        std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  return files;
+}
+
+std::vector<SynthCar> TestCars() {
+  return {{"boxcar_a", test::MakeBoxCar(4.2)}, {"boxcar_b", test::MakeBoxCar(3.8)}};
+}
+
+TEST(Synth, DeterministicBySeed) {
+  const std::string a = test::MakeTempFolder("synth_a"), b = test::MakeTempFolder("synth_b"),
+                    c = test::MakeTempFolder("synth_c");
+  SynthesizeSequences(test::QuickSynthOptions(a, 11), TestCars());
+  SynthesizeSequences(test::QuickSynthOptions(b, 11), TestCars());
+  SynthesizeSequences(test::QuickSynthOptions(c, 12), TestCars());
+  const auto files_a = ReadTree(a), files_b = ReadTree(b), files_c = ReadTree(c);
+  ASSERT_GT(files_a.size(), 50u);
+  EXPECT_EQ(files_a.size(), files_b.size());
+  for (const auto& [name, content] : files_a) {
+    ASSERT_TRUE(files_b.count(name)) << name;
+    EXPECT_TRUE(files_b.at(name) == content) << name << " differs between two runs with the same seed";
+  }
+  int differing = 0;
+  for (const auto& [name, content] : files_a) {
+    if (!files_c.count(name) || files_c.at(name) != content) ++differing;
+  }
+  EXPECT_GT(differing, 20) << "another seed must give other scenes";
+  for (const auto& folder : {a, b, c}) fs::remove_all(folder);
+}
+
+TEST(Synth, WritesTheLayoutFitReads) {
+  const std::string root = test::MakeTempFolder("synth_layout");
+  SynthOptions options = test::QuickSynthOptions(root, 3);
+  options.num_sequences = 1;
+  const SynthSummary summary = SynthesizeSequences(options, TestCars());
+  ASSERT_EQ(summary.sequences.size(), 1u);
+  EXPECT_EQ(summary.num_tracks, 2);
+  const std::string seq_dir = summary.sequences[0].folder;
+  EXPECT_EQ(fs::path(seq_dir).filename().string(), "000000");
+
+  const SequenceFiles files = ListSequence(seq_dir);
+  EXPECT_EQ(files.name, "000000");
+  ASSERT_EQ(files.frames.size(), 5u);
+  const StereoCalibration calibration = ReadCalibration(files.calibration, options.width, options.height);
+  EXPECT_NEAR(calibration.baseline, options.baseline, 1e-6);
+  EXPECT_NEAR(calibration.camera.fx, options.focal_px, 1e-4);
+  const auto poses = ReadPoses(files.poses);
+  ASSERT_EQ(poses.size(), 5u);
+  EXPECT_TRUE(poses[0].isApprox(Eigen::Isometry3d::Identity()));
+  for (const FrameFiles& frame : files.frames) {
+    EXPECT_FALSE(frame.image_left.empty());
+    EXPECT_FALSE(frame.image_right.empty());
+    const cv::Mat disparity = ReadDisparity(frame.disparity, cv::Size(options.width, options.height));
+    EXPECT_GT(cv::countNonZero(disparity), options.width * options.height / 2);
+    const Eigen::Vector4d plane = ReadPlane(frame.plane);
+    EXPECT_NEAR(plane[3], options.camera_height, 1e-6);
+    ReadLabels(frame.detections);  // parses
+  }
+  // Ground truth: labels, object maps consistent with the labels, meshes.
+  const auto gt = ReadTrackingLabels(seq_dir + "/gt/label_02/000000.txt");
+  ASSERT_FALSE(gt.empty());
+  for (const ObjectLabel& label : gt) {
+    EXPECT_GE(label.track_id, 0);
+    EXPECT_LT(label.track_id, 2);
+    EXPECT_NEAR(label.position.y(), options.camera_height, 1e-3) << "cars stand on the road";
+    EXPECT_GE(label.position.norm(), 3.0);
+    const cv::Mat object_map =
+        cv::imread(seq_dir + "/gt/obj_map/000000_0" + std::to_string(label.frame) + ".png",
+                   cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(object_map.type(), CV_8UC1);
+    EXPECT_GT(cv::countNonZero(object_map == label.track_id + 1), 0)
+        << "a labelled car is visible in its frame";
+  }
+  EXPECT_TRUE(fs::exists(seq_dir + "/gt/meshes/track_0.ply"));
+  EXPECT_TRUE(fs::exists(seq_dir + "/gt/cars.json"));
+  EXPECT_TRUE(fs::exists(root + "/config.json"));
+  fs::remove_all(root);
+}
+
+TEST(Synth, RejectsBadOptions) {
+  SynthOptions options = test::QuickSynthOptions("/nonexistent/never", 1);
+  options.num_frames = 0;
+  EXPECT_THROW(SynthesizeSequences(options, TestCars()), Error);
+  options = test::QuickSynthOptions("/nonexistent/never", 1);
+  options.min_distance = 50.0;
+  EXPECT_THROW(options.Check(), Error);
+  EXPECT_THROW(SynthesizeSequences(test::QuickSynthOptions("/nonexistent/never", 1), {}), Error);
+}
+
+// synth -> eval with the true meshes and poses as the "result": perfect scores;
+// the raw stereo and the noisy detections are worse.
+TEST(SynthEval, GroundTruthAsResultIsPerfect) {
+  const std::string root = test::MakeTempFolder("synth_eval");
+  SynthOptions options = test::QuickSynthOptions(root, 5);
+  const SynthSummary summary = SynthesizeSequences(options, TestCars());
+  EvalOptions eval;
+  for (const SynthSequenceInfo& s : summary.sequences) eval.sequences.push_back(s.folder);
+  // Each sequence's gt/ holds label_02/<seq>.txt and meshes/track_<id>.ply, as a fit result does;
+  // evaluate the first sequence against its own truth.
+  eval.sequences.resize(1);
+  eval.results.emplace_back("truth", summary.sequences[0].folder + "/gt");
+  eval.output_folder = root + "/eval";
+  eval.min_segment_pixels = 30;
+  const EvalSummary result = Evaluate(eval);
+  ASSERT_GT(result.num_gt_car_frames, 3);
+  ASSERT_EQ(result.shape.size(), 2u);  // stereo, truth
+  const size_t tau_005 = 0;
+  EXPECT_EQ(result.shape[1].method, "truth");
+  EXPECT_GT(result.shape[1].f1[tau_005], 0.995) << "the true mesh at the true pose reproduces the true depth";
+  EXPECT_LT(result.shape[0].f1[tau_005], result.shape[1].f1[tau_005]);
+  EXPECT_GT(result.shape[0].f1[9], 0.5) << "noisy true disparity is still close at tau = 0.5";
+  ASSERT_EQ(result.pose.size(), 2u);  // detections, truth
+  EXPECT_LT(result.pose[1].all.translation_mean, 1e-3);
+  EXPECT_LT(result.pose[1].all.yaw_mean_deg, 0.01);
+  EXPECT_GT(result.pose[0].all.translation_mean, 0.01);
+  for (const char* file : {"results.md", "results.json", "shape.csv", "pose.csv", "per_object.csv",
+                           "f1_vs_tau.png", "translation_vs_distance.png"}) {
+    EXPECT_TRUE(fs::exists(eval.output_folder + "/" + file)) << file;
+  }
+  fs::remove_all(root);
+}
+
+}  // namespace
+}  // namespace samp

@@ -1,0 +1,65 @@
+// `samp eval`: fitted tracks on synthetic sequences -> the paper's shape and pose tables and plots.
+#include <iostream>
+#include <memory>
+
+#include "libsamp/core/error.h"
+#include "libsamp/core/log.h"
+#include "libsamp/eval/evaluation.h"
+#include "tools/samp/commands.h"
+
+namespace samp::tools {
+
+void RegisterEvalCommand(CLI::App* app) {
+  struct Args {
+    EvalOptions options;
+    std::vector<std::string> results;
+    bool no_stereo = false, no_detections = false;
+  };
+  auto args = std::make_shared<Args>();
+  EvalOptions& o = args->options;
+  CLI::App* command = app->add_subcommand(
+      "eval",
+      "Evaluate fitted tracks on synthetic sequences with ground truth (docs/evaluation.md):\n"
+      "accuracy, completeness and F1 of the visible surface over a sweep of tau, translation and\n"
+      "yaw errors by distance; baselines: raw stereo points and the input detections.\n"
+      "Writes results.md, results.json, shape.csv, pose.csv, per_object.csv and PNG plots.");
+  command->add_option("--seq", o.sequences, "A synthetic sequence folder (with gt/); repeatable")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  command->add_option("--result", args->results,
+                      "NAME=DIR: a `samp fit` output folder to evaluate under NAME; repeatable")
+      ->expected(0, -1);
+  command->add_option("-o,--out", o.output_folder, "Output folder for tables and plots")->required();
+  command->add_option("--taus", o.taus, "Distance thresholds tau of the shape sweep, m")
+      ->capture_default_str()
+      ->delimiter(',');
+  command->add_option("--tau", o.headline_tau, "Headline tau of the table, m (one of --taus)")
+      ->capture_default_str();
+  command->add_option("--window", o.distance_window, "Width of the pose distance windows, m")
+      ->capture_default_str();
+  command->add_option("--min-pixels", o.min_segment_pixels,
+                      "Evaluate car-frames with at least this many visible pixels")
+      ->capture_default_str();
+  command->add_option("--min-iou", o.min_iou, "2D IoU needed to match a result box to the truth")
+      ->capture_default_str();
+  command->add_flag("--no-stereo", args->no_stereo, "Leave out the raw-stereo shape baseline");
+  command->add_flag("--no-detections", args->no_detections, "Leave out the input-detection pose baseline");
+  command->add_option("--threads", o.num_threads, "Worker threads (0 = all cores)")->capture_default_str();
+  AddCommonOptions(command);
+  command->callback([args] {
+    EvalOptions options = args->options;
+    options.stereo_baseline = !args->no_stereo;
+    options.detection_baseline = !args->no_detections;
+    for (const std::string& result : args->results) {
+      const size_t eq = result.find('=');
+      SAMP_CHECK(eq != std::string::npos && eq > 0 && eq + 1 < result.size())
+          << "eval: --result must be NAME=DIR, got '" << result << "'";
+      options.results.emplace_back(result.substr(0, eq), result.substr(eq + 1));
+    }
+    const EvalSummary summary = Evaluate(options);
+    std::cout << summary.markdown << "\n" << summary.BriefReport() << "\nwrote " << options.output_folder
+              << std::endl;
+  });
+}
+
+}  // namespace samp::tools
