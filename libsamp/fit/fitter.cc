@@ -279,9 +279,11 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
     if (int(data[k].points.size()) >= options.min_points_per_frame) {
       std::vector<double> sigmas = data[k].sigmas;
       for (double& s : sigmas) s *= sigma_scale;
-      problem.AddResidualBlock(
-          SdfCost::Create(&lookup, data[k].points, sigmas, options.huber_threshold, frame_weight),
-          nullptr, z, pose);
+      ceres::CostFunction* cost =
+          options.compress_data_blocks
+              ? CompressedSdfCost::Create(&lookup, data[k].points, sigmas, options.huber_threshold, frame_weight)
+              : SdfCost::Create(&lookup, data[k].points, sigmas, options.huber_threshold, frame_weight);
+      problem.AddResidualBlock(cost, nullptr, z, pose);
       report.num_points += int(data[k].points.size());
     }
     problem.AddResidualBlock(GroundCost::Create(f.ground_plane_in_world, options.sigma_ground, frame_weight),

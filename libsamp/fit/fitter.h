@@ -33,6 +33,9 @@ struct FitOptions {
   double em_box_margin = 0.3;
   // Frames with fewer associated points get no data term (motion carries them).
   int min_points_per_frame = 10;
+  // Data blocks compressed to R + 5 residuals with the same cost, gradient and
+  // Gauss-Newton matrix (CompressedSdfCost; much faster); false = N residuals.
+  bool compress_data_blocks = true;
   // Huber threshold of the data term, in units of sigma_d.
   double huber_threshold = 1.0;
   // Standard deviation of the car's height above that frame's road plane, m.

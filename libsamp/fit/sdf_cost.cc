@@ -1,5 +1,7 @@
 #include "libsamp/fit/sdf_cost.h"
 
+#include <Eigen/Cholesky>
+#include <algorithm>
 #include <cmath>
 
 #include "libsamp/core/error.h"
@@ -76,6 +78,70 @@ bool SdfCost::Evaluate(double const* const* parameters, double* residuals,
       row[2] = -f * (-s * g[0] + c * g[2]);
       row[3] = f * (-g[0] * o[2] + g[2] * o[0]);
     }
+  }
+  return true;
+}
+
+CompressedSdfCost::CompressedSdfCost(const ShapeLookup* lookup,
+                                     const std::vector<Eigen::Vector3d>& points_in_world,
+                                     const std::vector<double>& sigmas, double huber_threshold,
+                                     double weight)
+    : full_(lookup, points_in_world, sigmas, huber_threshold, weight),
+      num_components_(lookup->num_components()) {
+  set_num_residuals(num_components_ + 4 + 1);
+  mutable_parameter_block_sizes()->push_back(num_components_);
+  mutable_parameter_block_sizes()->push_back(4);
+}
+
+bool CompressedSdfCost::Evaluate(double const* const* parameters, double* residuals,
+                                 double** jacobians) const {
+  using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const int n = full_.num_residuals();
+  const int nr = num_components_, m = nr + 4;
+  // Per-thread scratch (N x R, N x 4, N): avoids large allocations per call.
+  thread_local std::vector<double> r_buffer, jz_buffer, jp_buffer;
+  r_buffer.resize(size_t(n));
+  const bool need_jacobians = jacobians && (jacobians[0] || jacobians[1]);
+  if (!need_jacobians) {
+    if (!full_.Evaluate(parameters, r_buffer.data(), nullptr)) return false;
+    const Eigen::Map<const Eigen::VectorXd> r(r_buffer.data(), n);
+    for (int k = 0; k < m; ++k) residuals[k] = 0.0;
+    residuals[m] = r.norm();
+    return true;
+  }
+  jz_buffer.resize(size_t(n) * nr);
+  jp_buffer.resize(size_t(n) * 4);
+  double* full_jacobians[2] = {jz_buffer.data(), jp_buffer.data()};
+  if (!full_.Evaluate(parameters, r_buffer.data(), full_jacobians)) return false;
+  const Eigen::Map<const Eigen::VectorXd> r(r_buffer.data(), n);
+  const Eigen::Map<const RowMatrix> jz(jz_buffer.data(), n, nr);
+  const Eigen::Map<const RowMatrix> jp(jp_buffer.data(), n, 4);
+  Eigen::MatrixXd h(m, m);
+  h.topLeftCorner(nr, nr).noalias() = jz.transpose() * jz;
+  h.topRightCorner(nr, 4).noalias() = jz.transpose() * jp;
+  h.bottomRightCorner(4, 4).noalias() = jp.transpose() * jp;
+  h.bottomLeftCorner(4, nr) = h.topRightCorner(nr, 4).transpose();
+  Eigen::VectorXd g(m);
+  g.head(nr).noalias() = jz.transpose() * r;
+  g.tail(4).noalias() = jp.transpose() * r;
+  const double eps = 1e-12 * std::max(h.trace(), 1e-300);
+  h.diagonal().array() += eps;
+  Eigen::LLT<Eigen::MatrixXd> llt(h);
+  if (llt.info() != Eigen::Success) return false;
+  const Eigen::VectorXd rc = llt.matrixL().solve(g);
+  for (int k = 0; k < m; ++k) residuals[k] = rc[k];
+  residuals[m] = std::sqrt(std::max(0.0, r.squaredNorm() - rc.squaredNorm()));
+  const RowMatrix lt = llt.matrixL().transpose();  // m x m, upper
+  // Row k of the compressed Jacobian = row k of L^T; last row zero.
+  if (jacobians[0]) {
+    Eigen::Map<RowMatrix> out(jacobians[0], m + 1, nr);
+    out.topRows(m) = lt.leftCols(nr);
+    out.row(m).setZero();
+  }
+  if (jacobians[1]) {
+    Eigen::Map<RowMatrix> out(jacobians[1], m + 1, 4);
+    out.topRows(m) = lt.rightCols(4);
+    out.row(m).setZero();
   }
   return true;
 }

@@ -56,4 +56,39 @@ class SdfCost : public ceres::CostFunction {
   double sqrt_weight_ = 1.0;    // sqrt(w / N)
 };
 
+// The same data term compressed to R + 5 residuals with identical cost,
+// gradient and Gauss-Newton Hessian, so Ceres' linear algebra works on a
+// (R + 4)-row block instead of an N-row one (the per-point work stays):
+// with J, r the N-row Jacobian and residuals of SdfCost at the current
+// parameters, H = J^T J + eps I = L L^T (Cholesky, eps = 1e-12 trace(H)),
+//   residuals  = (L^-1 J^T r, sqrt(max(0, |r|^2 - |L^-1 J^T r|^2)))
+//   Jacobian   = (L^T; 0)
+// => |residuals|^2 = |r|^2 (the cost), Jacobian^T residuals = J^T r (the
+// gradient), Jacobian^T Jacobian = H (the Gauss-Newton matrix), and
+// |Jacobian d + residuals|^2 = |J d + r|^2 for every step d, so
+// Levenberg-Marquardt takes exactly the steps of the uncompressed problem.
+// A cost-only evaluation (no Jacobians requested) returns (0, .., 0, |r|).
+// The returned Jacobian is NOT the derivative of the returned residuals
+// (those depend on the linearisation point); tests compare cost, gradient
+// and J^T J with SdfCost instead of numeric differentiation.
+class CompressedSdfCost : public ceres::CostFunction {
+ public:
+  CompressedSdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
+                    const std::vector<double>& sigmas, double huber_threshold, double weight);
+
+  static ceres::CostFunction* Create(const ShapeLookup* lookup,
+                                     const std::vector<Eigen::Vector3d>& points_in_world,
+                                     const std::vector<double>& sigmas, double huber_threshold,
+                                     double weight) {
+    return new CompressedSdfCost(lookup, points_in_world, sigmas, huber_threshold, weight);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override;
+
+ private:
+  SdfCost full_;
+  int num_components_;
+};
+
 }  // namespace samp

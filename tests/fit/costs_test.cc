@@ -215,6 +215,52 @@ TEST(SdfCost, ResidualAndJacobians) {
   }
 }
 
+TEST(CompressedSdfCost, SameCostGradientAndGaussNewtonMatrix) {
+  const ShapeLookup& lookup = Lookup();
+  std::mt19937 rng(4);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const Eigen::VectorXd z_true = 0.5 * lookup.sigmas();
+  const auto surface = testing::SampleSurface(lookup, z_true, 300, &rng);
+  for (double offset : {0.05, 0.5, 4.0}) {  // last: many points outside the grid
+    const Eigen::Isometry3d world_from_object = WorldFromObject(Eigen::Vector3d(3, 1.6, 12), M_PI - 0.01);
+    std::vector<Eigen::Vector3d> points;
+    std::vector<double> sigmas;
+    for (const auto& p : surface) {
+      points.push_back(world_from_object * (p + offset * Eigen::Vector3d(n(rng), n(rng), n(rng))));
+      sigmas.push_back(0.1);
+    }
+    SdfCost full(&lookup, points, sigmas, 1.0, 0.2);
+    CompressedSdfCost compressed(&lookup, points, sigmas, 1.0, 0.2);
+    ASSERT_EQ(compressed.num_residuals(), 10);
+    Eigen::VectorXd z = -0.2 * lookup.sigmas();
+    double pose[4] = {3.1, 1.55, 12.05, -M_PI + 0.02};
+    const double* params[2] = {z.data(), pose};
+    using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+    const int n_full = full.num_residuals();
+    Eigen::VectorXd rf(n_full), rc(10), rc_cost(10);
+    RowMatrix jzf(n_full, 5), jpf(n_full, 4), jzc(10, 5), jpc(10, 4);
+    double* jf[2] = {jzf.data(), jpf.data()};
+    double* jc[2] = {jzc.data(), jpc.data()};
+    ASSERT_TRUE(full.Evaluate(params, rf.data(), jf));
+    ASSERT_TRUE(compressed.Evaluate(params, rc.data(), jc));
+    ASSERT_TRUE(compressed.Evaluate(params, rc_cost.data(), nullptr));
+    RowMatrix af(n_full, 9), ac(10, 9);
+    af << jzf, jpf;
+    ac << jzc, jpc;
+    const double scale = std::max(1.0, rf.squaredNorm());
+    EXPECT_NEAR(rc.squaredNorm(), rf.squaredNorm(), 1e-9 * scale) << "offset " << offset;
+    EXPECT_NEAR(rc_cost.squaredNorm(), rf.squaredNorm(), 1e-9 * scale);
+    const Eigen::VectorXd gf = af.transpose() * rf, gc = ac.transpose() * rc;
+    EXPECT_LT((gf - gc).cwiseAbs().maxCoeff(), 1e-8 * std::max(1.0, gf.cwiseAbs().maxCoeff()));
+    const Eigen::MatrixXd hf = af.transpose() * af, hc = ac.transpose() * ac;
+    EXPECT_LT((hf - hc).cwiseAbs().maxCoeff(), 1e-8 * std::max(1.0, hf.cwiseAbs().maxCoeff()));
+    // The linearised cost agrees for an arbitrary step.
+    Eigen::VectorXd d(9);
+    d << 0.1, -0.2, 0.3, 0.0, 0.05, 0.02, -0.01, 0.03, 0.01;
+    EXPECT_NEAR((af * d + rf).squaredNorm(), (ac * d + rc).squaredNorm(), 1e-8 * scale);
+  }
+}
+
 TEST(SdfCost, RejectsBadInput) {
   const ShapeLookup& lookup = Lookup();
   EXPECT_THROW(SdfCost(&lookup, {}, {}, 1.0, 1.0), Error);
