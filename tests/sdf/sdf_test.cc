@@ -1,0 +1,305 @@
+#include "libsamp/sdf/sdf.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+
+#include "libsamp/core/error.h"
+#include "libsamp/scan/scanner.h"
+
+namespace samp {
+namespace {
+
+#define TEST_NAME ::testing::UnitTest::GetInstance()->current_test_info()->name()
+
+using AnalyticSdf = std::function<double(const Eigen::Vector3d&)>;
+
+ScanOptions TestScanOptions() {
+  ScanOptions options;
+  options.num_views = 100;
+  options.width = 300;
+  options.height = 300;
+  return options;
+}
+
+double BoxSdf(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  const Eigen::Vector3d center = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+  const Eigen::Vector3d q = (p - center).cwiseAbs() - half;
+  const double outside = q.cwiseMax(0.0).norm();
+  const double inside = std::min(q.maxCoeff(), 0.0);
+  return outside + inside;
+}
+
+struct Comparison {
+  double max_error_near = 0.0;   // over voxels with |truth| < 3 voxels
+  double max_error_far = 0.0;    // over the other voxels
+  int64_t wrong_sign = 0;        // voxels with |truth| > half a voxel and the wrong sign
+  int64_t near_voxels = 0;
+};
+
+Comparison Compare(const Sdf& sdf, const AnalyticSdf& truth, const char* label) {
+  Comparison c;
+  const GridSpec& grid = sdf.grid;
+  const double h = grid.voxel_size;
+  for (int k = 0; k < grid.dims.z(); ++k) {
+    for (int j = 0; j < grid.dims.y(); ++j) {
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const double expected = truth(grid.Position(i, j, k));
+        const double value = sdf.values[size_t(grid.Index(i, j, k))];
+        const double error = std::abs(value - expected);
+        if (std::abs(expected) < 3 * h) {
+          c.max_error_near = std::max(c.max_error_near, error);
+          ++c.near_voxels;
+        } else {
+          c.max_error_far = std::max(c.max_error_far, error);
+        }
+        if (std::abs(expected) > 0.5 * h && (value > 0) != (expected > 0)) ++c.wrong_sign;
+      }
+    }
+  }
+  std::printf("%s: max error near the surface %.4f m, far %.4f m (voxel %.3f m), %lld wrong signs\n",
+              label, c.max_error_near, c.max_error_far, h, static_cast<long long>(c.wrong_sign));
+  return c;
+}
+
+TEST(Sdf, ClosedBoxMatchesTheAnalyticSdf) {
+  const Eigen::Vector3d lo(-0.62, -0.31, -0.43), hi(0.58, 0.33, 0.41);
+  const Mesh mesh = MakeBoxMesh(lo, hi);
+  const ScanResult scan = ScanMesh(mesh, TestScanOptions());
+  const GridSpec grid = GridSpec::FromBox(lo.array() - 0.3, hi.array() + 0.3, 0.05);
+  const Sdf sdf = ComputeSdf(mesh, scan, grid, SdfOptions());
+  EXPECT_EQ(sdf.summary.num_seen_triangles, 12);
+  EXPECT_TRUE(sdf.summary.sign_ok);
+  const Comparison c = Compare(sdf, [&](const Eigen::Vector3d& p) { return BoxSdf(p, lo, hi); }, TEST_NAME);
+  const double h = grid.voxel_size;
+  EXPECT_GT(c.near_voxels, 1000);
+  EXPECT_LT(c.max_error_near, 0.5 * h);
+  EXPECT_LT(c.max_error_far, 0.5 * h);
+  EXPECT_EQ(c.wrong_sign, 0);
+  // Inside fraction: voxels strictly inside the box over all voxels (the
+  // grid has samples on the faces, within rounding: they count as outside).
+  int64_t inside = 0;
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i) inside += BoxSdf(grid.Position(i, j, k), lo, hi) < -1e-6;
+  EXPECT_NEAR(sdf.summary.inside_fraction, double(inside) / grid.NumVoxels(), 1e-3);
+}
+
+TEST(Sdf, SphereMatchesTheAnalyticSdf) {
+  const Eigen::Vector3d center(0.1, -0.2, 0.05);
+  const double radius = 0.55;
+  const Mesh mesh = MakeSphereMesh(center, radius, 64, 128);
+  const ScanResult scan = ScanMesh(mesh, TestScanOptions());
+  const GridSpec grid = GridSpec::FromBox(center.array() - 0.9, center.array() + 0.9, 0.05);
+  const Sdf sdf = ComputeSdf(mesh, scan, grid, SdfOptions());
+  EXPECT_TRUE(sdf.summary.sign_ok);
+  EXPECT_GT(sdf.summary.num_seen_triangles, int(0.99 * mesh.triangles.size()));
+  const Comparison c =
+      Compare(sdf, [&](const Eigen::Vector3d& p) { return (p - center).norm() - radius; }, TEST_NAME);
+  const double h = grid.voxel_size;
+  EXPECT_GT(c.near_voxels, 1000);
+  EXPECT_LT(c.max_error_near, 0.5 * h);
+  EXPECT_LT(c.max_error_far, 0.5 * h);
+  EXPECT_EQ(c.wrong_sign, 0);
+}
+
+// Visibility semantics on an open box (the face y = lo.y missing): the inside
+// of the box is seen through the opening, so it is outside, and the walls
+// (seen from both sides) are zero-thickness sheets. The SDF is the unsigned
+// distance to the walls everywhere, the inside fraction is zero and the
+// model is rejected (sign_ok false) rather than trained on a wrong sign.
+TEST(Sdf, OpenBoxIsOutsideEverywhere) {
+  const Eigen::Vector3d lo(-0.5, -0.3, -0.4), hi(0.5, 0.3, 0.4);
+  Mesh mesh = MakeBoxMesh(lo, hi);
+  mesh.triangles.erase(mesh.triangles.begin() + 4, mesh.triangles.begin() + 6);  // y = lo face
+  const ScanResult scan = ScanMesh(mesh, TestScanOptions());
+  const GridSpec grid = GridSpec::FromBox(lo.array() - 0.25, hi.array() + 0.25, 0.05);
+  const Sdf sdf = ComputeSdf(mesh, scan, grid, SdfOptions());
+  EXPECT_EQ(sdf.summary.num_seen_triangles, 10);
+  EXPECT_EQ(sdf.summary.inside_fraction, 0.0);
+  EXPECT_FALSE(sdf.summary.sign_ok);
+  // Unsigned distance to the five walls.
+  const Eigen::Vector3d center = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+  const double h = grid.voxel_size;
+  double max_error = 0.0;
+  int64_t inner_voxels = 0;
+  for (int k = 0; k < grid.dims.z(); ++k) {
+    for (int j = 0; j < grid.dims.y(); ++j) {
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const Eigen::Vector3d p = grid.Position(i, j, k);
+        const float value = sdf.values[size_t(grid.Index(i, j, k))];
+        ASSERT_GE(value, 0.0f);
+        const Eigen::Vector3d q = p - center;
+        if ((q.cwiseAbs().array() < half.array() - 1e-9).all()) {
+          ++inner_voxels;
+          // Distance to the nearest of the 5 walls from inside.
+          const double d = std::min({half.x() - std::abs(q.x()), half.z() - std::abs(q.z()),
+                                     half.y() - q.y()});
+          max_error = std::max(max_error, std::abs(value - d));
+        }
+      }
+    }
+  }
+  EXPECT_GT(inner_voxels, 1000);
+  EXPECT_LT(max_error, 0.5 * h);
+}
+
+// A box that is closed to the eye but not watertight: six separate quads
+// (no shared vertices), each overhanging its neighbours, plus a duplicated
+// face. The sign must be that of the solid box.
+TEST(Sdf, NonWatertightSoupBoxHasTheSolidSign) {
+  const Eigen::Vector3d lo(-0.5, -0.3, -0.4), hi(0.5, 0.3, 0.4);
+  const double overhang = 0.02;
+  Mesh mesh;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (int side = 0; side < 2; ++side) {
+      Eigen::Vector3d face_lo = lo.array() - overhang, face_hi = hi.array() + overhang;
+      face_lo[axis] = face_hi[axis] = side ? hi[axis] : lo[axis];
+      face_hi[axis] += 1e-4;  // MakeBoxMesh needs a non-degenerate box: take one of its faces
+      Mesh slab = MakeBoxMesh(face_lo, face_hi);
+      Mesh quad;
+      quad.vertices = slab.vertices;
+      // Faces 2*axis (the low side of the thin slab) of MakeBoxMesh's ordering.
+      quad.triangles = {slab.triangles[size_t(4 * axis)], slab.triangles[size_t(4 * axis + 1)]};
+      mesh.Append(quad);
+    }
+  }
+  mesh.Append(MakeBoxMesh(lo, hi));  // duplicated, coincident faces
+  const ScanResult scan = ScanMesh(mesh, TestScanOptions());
+  const GridSpec grid = GridSpec::FromBox(lo.array() - 0.25, hi.array() + 0.25, 0.05);
+  const Sdf sdf = ComputeSdf(mesh, scan, grid, SdfOptions());
+  EXPECT_TRUE(sdf.summary.sign_ok);
+  const double h = grid.voxel_size;
+  // Near the overhanging edges the surface differs from the box by <= 2 cm.
+  const Comparison c = Compare(sdf, [&](const Eigen::Vector3d& p) { return BoxSdf(p, lo, hi); }, TEST_NAME);
+  EXPECT_EQ(c.wrong_sign, 0);
+  EXPECT_LT(c.max_error_near, 0.5 * h + overhang * std::sqrt(2.0));
+}
+
+// A closed hull with geometry inside it (a smaller box and a plane through
+// the middle, never seen by the scans): it must not create zero crossings.
+TEST(Sdf, InteriorFacesOfAClosedHullAreIgnored) {
+  const Eigen::Vector3d lo(-0.6, -0.35, -0.4), hi(0.6, 0.35, 0.4);
+  Mesh mesh = MakeBoxMesh(lo, hi);
+  mesh.Append(MakeBoxMesh(Eigen::Vector3d(-0.3, -0.1, -0.2), Eigen::Vector3d(0.1, 0.2, 0.15)));
+  Mesh plane;
+  plane.vertices = {Eigen::Vector3f(-0.55f, 0.0f, -0.35f), Eigen::Vector3f(0.55f, 0.0f, -0.35f),
+                    Eigen::Vector3f(0.55f, 0.0f, 0.35f), Eigen::Vector3f(-0.55f, 0.0f, 0.35f)};
+  plane.triangles = {Eigen::Vector3i(0, 1, 2), Eigen::Vector3i(0, 2, 3)};
+  mesh.Append(plane);
+  const ScanResult scan = ScanMesh(mesh, TestScanOptions());
+  const GridSpec grid = GridSpec::FromBox(lo.array() - 0.25, hi.array() + 0.25, 0.05);
+  const Sdf sdf = ComputeSdf(mesh, scan, grid, SdfOptions());
+  EXPECT_EQ(sdf.summary.num_seen_triangles, 12);
+  const Comparison c = Compare(sdf, [&](const Eigen::Vector3d& p) { return BoxSdf(p, lo, hi); }, TEST_NAME);
+  const double h = grid.voxel_size;
+  EXPECT_EQ(c.wrong_sign, 0);
+  EXPECT_LT(c.max_error_near, 0.5 * h);
+  EXPECT_LT(c.max_error_far, 0.5 * h);
+  // Every voxel strictly inside the hull is negative (no spurious crossings).
+  for (int k = 0; k < grid.dims.z(); ++k)
+    for (int j = 0; j < grid.dims.y(); ++j)
+      for (int i = 0; i < grid.dims.x(); ++i)
+        if (BoxSdf(grid.Position(i, j, k), lo, hi) < -1e-9)
+          ASSERT_LT(sdf.values[size_t(grid.Index(i, j, k))], 0.0f) << i << " " << j << " " << k;
+}
+
+// One view only: what it sees in front of the box and around it is outside,
+// the box's shadow behind it is inside, voxels outside its frustum are outside.
+TEST(Sdf, SingleViewCarvesItsFrontAndLeavesTheShadow) {
+  const Eigen::Vector3d lo(-0.3, -0.3, -0.3), hi(0.3, 0.3, 0.3);
+  const Mesh mesh = MakeBoxMesh(lo, hi);
+  ScanOptions scan_options = TestScanOptions();
+  scan_options.num_views = 1;
+  scan_options.fov_deg = 20.0;  // narrow: the grid corners are outside the frustum
+  const ScanResult scan = ScanMesh(mesh, scan_options);
+  const GridSpec grid = GridSpec::FromBox(Eigen::Vector3d::Constant(-1.0), Eigen::Vector3d::Constant(1.0), 0.05);
+  const Sdf sdf = ComputeSdf(mesh, scan, grid, SdfOptions());
+  const ScanView& view = scan.views[0];
+  const Eigen::Vector3d camera_center = view.camera_from_object.inverse().translation();
+  const Eigen::Vector3d direction = -camera_center.normalized();  // viewing direction
+  int64_t shadow = 0, front = 0, out_of_view = 0;
+  for (int k = 0; k < grid.dims.z(); ++k) {
+    for (int j = 0; j < grid.dims.y(); ++j) {
+      for (int i = 0; i < grid.dims.x(); ++i) {
+        const Eigen::Vector3d p = grid.Position(i, j, k);
+        const float value = sdf.values[size_t(grid.Index(i, j, k))];
+        const Eigen::Vector3d pc = view.camera_from_object * p;
+        const bool in_view = pc.z() > 0 && view.camera.Contains(view.camera.Project(pc) +
+                                                                Eigen::Vector2d(0.5, 0.5));
+        if (!in_view) {
+          ++out_of_view;
+          ASSERT_GT(value, 0.0f);
+          continue;
+        }
+        // Behind the box along the viewing direction, well inside its shadow.
+        const Eigen::Vector3d q = p - direction * (p.dot(direction));  // lateral offset
+        const bool deep_shadow = BoxSdf(p, lo, hi) < -0.06 ||
+                                 (p.dot(direction) > 0.45 && (q.cwiseAbs().array() < 0.1).all());
+        if (deep_shadow) {
+          ++shadow;
+          ASSERT_LT(value, 0.0f) << p.transpose();
+        }
+        if (p.dot(direction) < -0.6) {
+          ++front;
+          ASSERT_GT(value, 0.0f) << p.transpose();
+        }
+      }
+    }
+  }
+  EXPECT_GT(shadow, 100);
+  EXPECT_GT(front, 100);
+  EXPECT_GT(out_of_view, 100);
+}
+
+TEST(Sdf, ParallelEqualsSerialAndTruncationClamps) {
+  const Mesh mesh = MakeSphereMesh(Eigen::Vector3d::Zero(), 0.4, 24, 48);
+  const ScanResult scan = ScanMesh(mesh, TestScanOptions());
+  const GridSpec grid = GridSpec::FromBox(Eigen::Vector3d::Constant(-0.7), Eigen::Vector3d::Constant(0.7), 0.05);
+  const Sdf serial = ComputeSdf(mesh, scan, grid, SdfOptions(), false);
+  const Sdf parallel = ComputeSdf(mesh, scan, grid, SdfOptions(), true);
+  ASSERT_EQ(serial.values.size(), parallel.values.size());
+  for (size_t v = 0; v < serial.values.size(); ++v) ASSERT_EQ(serial.values[v], parallel.values[v]);
+  EXPECT_EQ(serial.summary.inside_fraction, parallel.summary.inside_fraction);
+
+  SdfOptions options;
+  options.truncation = 0.1;
+  const Sdf truncated = ComputeSdf(mesh, scan, grid, options);
+  for (size_t v = 0; v < serial.values.size(); ++v) {
+    ASSERT_EQ(truncated.values[v], std::clamp(serial.values[v], -0.1f, 0.1f));
+  }
+}
+
+TEST(Sdf, BadInputIsAnError) {
+  const Mesh mesh = MakeBoxMesh(Eigen::Vector3d::Constant(-0.3), Eigen::Vector3d::Constant(0.3));
+  ScanOptions scan_options = TestScanOptions();
+  scan_options.num_views = 4;
+  scan_options.width = scan_options.height = 64;
+  const ScanResult scan = ScanMesh(mesh, scan_options);
+  const GridSpec grid = GridSpec::FromBox(Eigen::Vector3d::Constant(-0.5), Eigen::Vector3d::Constant(0.5), 0.1);
+
+  ScanResult wrong_size = scan;
+  wrong_size.triangle_seen.pop_back();
+  EXPECT_THROW(ComputeSdf(mesh, wrong_size, grid, SdfOptions()), Error);
+
+  ScanResult unseen = scan;
+  std::fill(unseen.triangle_seen.begin(), unseen.triangle_seen.end(), 0);
+  EXPECT_THROW(ComputeSdf(mesh, unseen, grid, SdfOptions()), Error);
+
+  ScanResult short_view = scan;
+  short_view.views[0].depth.pop_back();
+  EXPECT_THROW(ComputeSdf(mesh, short_view, grid, SdfOptions()), Error);
+
+  SdfOptions options;
+  options.min_inside_fraction = 1.5;
+  EXPECT_THROW(options.Check(), Error);
+  options = SdfOptions();
+  options.truncation = -1;
+  EXPECT_THROW(ComputeSdf(mesh, scan, grid, options), Error);
+}
+
+}  // namespace
+}  // namespace samp
