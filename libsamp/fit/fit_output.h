@@ -1,0 +1,41 @@
+// Outputs of a fit (docs/fitting.md, "Output"): KITTI tracking result lines,
+// the fitted surface and the aligned observations as PLY, and the JSON
+// records (tracks.json, config.json). Every file is written atomically.
+// Free functions without shared state: thread-safe for distinct paths.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "libsamp/core/mesh.h"
+#include "libsamp/fit/fitter.h"
+#include "libsamp/fit/track.h"
+
+namespace samp {
+
+// Box of the fitted shape in the object frame: extent of phi_z < 0.
+AlignedBox FittedBox(const ShapeLookup& lookup, const Eigen::VectorXd& z);
+
+// KITTI tracking result of every frame of `fit` (camera frame of that frame,
+// using track.frames[k].world_from_camera): x y z = object origin, ry = yaw,
+// h w l = extent of the fitted box along object y, z, x, alpha = ry -
+// atan2(x, z), 2D box = projection of the fitted 3D box (its 8 corners)
+// clipped to the image, score = the detection's. `fit` and `track` must have
+// the same frames.
+std::vector<ObjectLabel> FitToLabels(const TrackFit& fit, const Track& track,
+                                     const ShapeLookup& lookup);
+
+// Zero level set of phi_z in the object frame (OpenVDB mesher via
+// libsamp/viz). Empty when the shape has no inside.
+Mesh FittedSurface(const ShapeLookup& lookup, const Eigen::VectorXd& z);
+
+// The associated points of every frame moved into the object frame by that
+// frame's fitted pose, coloured by frame (blue = first, red = last).
+PointCloud AlignedObservations(const TrackFit& fit);
+
+// JSON record of one fitted track (fields in docs/fitting.md).
+nlohmann::json TrackFitToJson(const TrackFit& fit, const AlignedBox& box);
+nlohmann::json FitOptionsToJson(const FitOptions& options);
+
+}  // namespace samp

@@ -1,0 +1,89 @@
+// `samp fit`: sequence directories -> fitted shape and trajectory of every
+// tracked car (docs/fitting.md).
+#include <iostream>
+#include <memory>
+
+#include "libsamp/core/error.h"
+#include "libsamp/core/log.h"
+#include "libsamp/fit/run_fit.h"
+#include "tools/samp/commands.h"
+
+#ifndef SAMP_DEFAULT_MODEL
+#define SAMP_DEFAULT_MODEL ""
+#endif
+
+namespace samp::tools {
+
+void RegisterFitCommand(CLI::App* app) {
+  auto options = std::make_shared<RunFitOptions>();
+  RunFitOptions& o = *options;
+  o.model_path = SAMP_DEFAULT_MODEL;
+  CLI::App* command = app->add_subcommand(
+      "fit",
+      "Fit shape (PCA SDF manifold) and trajectory of every tracked car in stereo sequences,\n"
+      "with shape and motion priors (SAMP). Writes OUT/label_02/<seq>.txt (KITTI tracking\n"
+      "results), OUT/meshes/track_<id>.ply (+ _points.ply), OUT/tracks.json and OUT/config.json.\n"
+      "A sequence or track that fails is reported and skipped. See docs/fitting.md.");
+  command->add_option("--model", o.model_path, "Shape model file (.vdb); default: the shipped model")
+      ->capture_default_str();
+  command->add_option("--seq", o.sequences,
+                      "Sequence directory (docs/sequence_format.md); repeat for a batch")
+      ->required();
+  command->add_option("--out", o.output_dir, "Output directory (created)")->required();
+  command->add_option("--tracks", o.tracking_labels,
+                      "KITTI tracking label file giving the tracks (frame track_id ...); repeat once "
+                      "per --seq, in the same order. Without it detections/ are linked into tracks");
+  command->add_flag("--single-frame", o.fit.single_frame,
+                    "Single-frame mode (GCPR 2016): a shape per frame, no motion term");
+  command->add_option("--em-iterations", o.fit.em_iterations,
+                      "Hard-EM passes (re-associate points with the fitted trajectory, solve again)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--max-iterations", o.fit.max_iterations, "LM iterations per solve")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--linear-solver", o.fit.linear_solver,
+                      "Ceres linear solver: sparse_normal_cholesky, dense_schur, iterative_schur, dense_qr")
+      ->capture_default_str();
+  command->add_option("--huber", o.fit.huber_threshold, "Huber threshold of the data term, in sigma_d")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--association-radius", o.fit.association_radius,
+                      "Initial association: points within this distance of the detection, m")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--sigma-disparity", o.sequence.observations.sigma_disparity_px,
+                      "Disparity noise for sigma_d = d^2 sigma / (b f), px")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--max-points", o.sequence.observations.max_points_per_frame,
+                      "At most this many candidate points per frame (seeded subsample; 0 = all)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--standing-speed", o.fit.standing_speed,
+                      "Below this speed the standing motion model is used, m/s")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--straight-yaw-rate", o.fit.straight_yaw_rate,
+                      "Below this yaw rate the straight-line model is used, else the arc, rad/s")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command->add_flag("--no-meshes", [options](int64_t) { options->write_meshes = false; },
+                    "Do not write meshes/ (PLY surfaces and aligned points)");
+  command->add_option("--threads", o.num_threads, "Worker threads for sequences and tracks")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  AddCommonOptions(command);
+  command->callback([options] {
+    SAMP_CHECK(!options->model_path.empty())
+        << "no --model given and this build has no default model";
+    const RunFitSummary summary = RunFit(*options);
+    std::cout << summary.BriefReport() << std::endl;
+    std::cout << "wrote " << options->output_dir << std::endl;
+    if (summary.num_sequences_failed == int(summary.sequences.size())) {
+      SAMP_THROW() << "every sequence failed";
+    }
+  });
+}
+
+}  // namespace samp::tools
