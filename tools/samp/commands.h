@@ -12,4 +12,7 @@ void AddCommonOptions(CLI::App* command);
 
 void RegisterTrainCommand(CLI::App* app);
 
+void RegisterSynthCommand(CLI::App* app);
+void RegisterEvalCommand(CLI::App* app);
+
 }  // namespace samp::tools

@@ -26,6 +26,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   // Subcommands (each in its own *_command.cc):
   samp::tools::RegisterTrainCommand(&app);
+  samp::tools::RegisterSynthCommand(&app);
+  samp::tools::RegisterEvalCommand(&app);
 
   try {
     app.parse(argc, argv);
