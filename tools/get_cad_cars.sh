@@ -53,11 +53,11 @@ torcs_cars=(155-DTM acura-nsx-sz baja-bug buggy car1-ow1 car1-stock1 car1-stock2
 trigger_bodies=(cordo evo fox)
 packages=(torcs-data trigger-rally-data)
 
-mkdir -p "$cache" || die "cannot create cache folder '$cache'"
-cache="$(cd "$cache" && pwd)"
+cache="$(realpath -m -- "$cache")"
 case "$cache/" in
   "$root/"*) die "the cache '$cache' is inside the repository; give a folder outside it" ;;
 esac
+mkdir -p "$cache" || die "cannot create cache folder '$cache'"
 debs="$cache/debs"
 extract="$cache/extract"
 cars="$cache/cars"
@@ -121,7 +121,7 @@ for p in "${packages[@]}"; do
     continue
   fi
   say "unpacking $(basename "$deb")"
-  rm -rf "$extract/$p" "$stamp"
+  rm -rf "${extract:?}/$p" "$stamp"
   dpkg-deb -x "$deb" "$extract/$p" || die "dpkg -x $(basename "$deb") failed"
   echo "$(basename "$deb") $(dpkg-deb -f "$deb" Package) $(dpkg-deb -f "$deb" Version) $(sha256sum "$deb" | cut -d' ' -f1)" >"$stamp"
 done
@@ -180,8 +180,8 @@ fi
 mv "$cars/SOURCES.txt.tmp" "$cars/SOURCES.txt"
 
 # 6. Report.
-count_torcs=$(ls "$cars/torcs"/*.acc | wc -l)
-count_trigger=$(ls "$cars/trigger"/*.obj | wc -l)
+count_torcs=$(find "$cars/torcs" -maxdepth 1 -name "*.acc" | wc -l)
+count_trigger=$(find "$cars/trigger" -maxdepth 1 -name "*.obj" | wc -l)
 say "cars in $cars:"
 (cd "$cars" && for f in torcs/*.acc trigger/*.obj; do
   printf '  %-24s %8d bytes\n' "$f" "$(stat -c %s "$f")"
