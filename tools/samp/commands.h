@@ -11,6 +11,7 @@ namespace samp::tools {
 void AddCommonOptions(CLI::App* command);
 
 void RegisterTrainCommand(CLI::App* app);
+void RegisterInspectCommand(CLI::App* app);
 
 void RegisterSynthCommand(CLI::App* app);
 void RegisterEvalCommand(CLI::App* app);

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   // Subcommands (each in its own *_command.cc):
   samp::tools::RegisterTrainCommand(&app);
+  samp::tools::RegisterInspectCommand(&app);
   samp::tools::RegisterSynthCommand(&app);
   samp::tools::RegisterEvalCommand(&app);
 
