@@ -13,6 +13,8 @@ void AddCommonOptions(CLI::App* command);
 void RegisterTrainCommand(CLI::App* app);
 void RegisterInspectCommand(CLI::App* app);
 
+void RegisterFitCommand(CLI::App* app);
+
 void RegisterSynthCommand(CLI::App* app);
 void RegisterEvalCommand(CLI::App* app);
 

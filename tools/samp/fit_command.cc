@@ -68,7 +68,7 @@ void RegisterFitCommand(CLI::App* app) {
                       "Below this yaw rate the straight-line model is used, else the arc, rad/s")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
-  command->add_flag("--no-meshes", [options](int64_t) { options->write_meshes = false; },
+  command->add_flag_callback("--no-meshes", [options] { options->write_meshes = false; },
                     "Do not write meshes/ (PLY surfaces and aligned points)");
   command->add_option("--threads", o.num_threads, "Worker threads for sequences and tracks")
       ->capture_default_str()

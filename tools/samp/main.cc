@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   // Subcommands (each in its own *_command.cc):
   samp::tools::RegisterTrainCommand(&app);
   samp::tools::RegisterInspectCommand(&app);
+  samp::tools::RegisterFitCommand(&app);
   samp::tools::RegisterSynthCommand(&app);
   samp::tools::RegisterEvalCommand(&app);
 
