@@ -109,7 +109,8 @@ TEST(MeshIo, MissingGarbageAndEmptyFilesThrowNamingTheFile) {
   const std::string garbage = (dir / "garbage.ply").string();
   const std::string empty = (dir / "empty.obj").string();
   const std::string lines_only = (dir / "lines.obj").string();
-  test::WriteText(garbage, std::string("\x01\x02garbage\xff\xfe not a mesh", 24));
+  const char kGarbage[] = "\x01\x02garbage\xff\xfe not a mesh";
+  test::WriteText(garbage, std::string(kGarbage, sizeof(kGarbage) - 1));
   test::WriteText(empty, "");
   test::WriteText(lines_only, "v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2\nl 2 3\n");
   for (const std::string& path : {missing, garbage, empty, lines_only}) {
