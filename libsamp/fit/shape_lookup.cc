@@ -33,9 +33,17 @@ ShapeLookup::ShapeLookup(const ShapeModel& model) : grid_(model.grid) {
   inv_voxel_ = 1.0 / grid_.voxel_size;
 }
 
-double ShapeLookup::Evaluate(const double* z, const double* point, double* d_point,
-                             double* d_z) const {
-  const int nr = num_components_;
+namespace {
+
+// The lookup with the number of components fixed at compile time (kR > 0)
+// or at run time (kR = 0): the fixed version lets the compiler unroll the
+// 8 x (R + 1) inner loops.
+template <int kR>
+double EvaluateKernel(const GridSpec& grid_, const Eigen::Vector3d& max_corner_, double inv_voxel_,
+                      const std::vector<double>& table_, int num_components, const double* z,
+                      const double* point, double* d_point, double* d_z) {
+  const int nr = kR > 0 ? kR : num_components;
+  const int stride_ = nr + 1;
   // Clamp to the grid box; remember which axes were clamped.
   double q[3], outside[3];
   bool clamped[3];
@@ -104,6 +112,21 @@ double ShapeLookup::Evaluate(const double* z, const double* point, double* d_poi
     }
   }
   return value;
+}
+
+}  // namespace
+
+double ShapeLookup::Evaluate(const double* z, const double* point, double* d_point,
+                             double* d_z) const {
+  switch (num_components_) {
+    case 5:
+      return EvaluateKernel<5>(grid_, max_corner_, inv_voxel_, table_, 5, z, point, d_point, d_z);
+    case 10:
+      return EvaluateKernel<10>(grid_, max_corner_, inv_voxel_, table_, 10, z, point, d_point, d_z);
+    default:
+      return EvaluateKernel<0>(grid_, max_corner_, inv_voxel_, table_, num_components_, z, point,
+                               d_point, d_z);
+  }
 }
 
 double ShapeLookup::Evaluate(const Eigen::VectorXd& z, const Eigen::Vector3d& point,
