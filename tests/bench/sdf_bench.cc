@@ -136,6 +136,7 @@ BENCHMARK(BM_OpenVdbMeshToSdfWholeGrid)->Unit(benchmark::kMillisecond)->MinTime(
 // Sign check on open / non-watertight meshes.
 
 // Wrong-sign voxels among those at least one voxel away from the truth's surface.
+// `counted` includes voxels whose value is 0.
 struct SignCount {
   int64_t wrong = 0;
   int64_t counted = 0;
@@ -150,7 +151,10 @@ SignCount CountWrongSigns(const GridSpec& grid, const Value& value, const Truth&
         const double t = truth(grid.Position(i, j, k));
         if (std::abs(t) < grid.voxel_size) continue;
         ++c.counted;
-        if ((value(i, j, k) > 0) != (t > 0)) ++c.wrong;
+        // A value of (-)0 is on some surface (e.g. a zero-thickness sheet the
+        // truth does not model): its sign is irrelevant.
+        const double v = value(i, j, k);
+        if (std::abs(v) > 1e-6 && (v > 0) != (t > 0)) ++c.wrong;
       }
     }
   }
