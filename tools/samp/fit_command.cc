@@ -68,6 +68,11 @@ void RegisterFitCommand(CLI::App* app) {
                       "Below this yaw rate the straight-line model is used, else the arc, rad/s")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  command->add_option("--min-track-length", o.sequence.tracker.min_track_length,
+                      "Tracks with fewer detections are dropped (1 keeps single detections, e.g. for "
+                      "--single-frame)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   command->add_flag_callback("--no-meshes", [options] { options->write_meshes = false; },
                     "Do not write meshes/ (PLY surfaces and aligned points)");
   command->add_option("--threads", o.num_threads, "Worker threads for sequences and tracks")
