@@ -208,7 +208,7 @@ out.append("- Methods: **stereo** = the input disparity inside the car's segment
 out.append(f"- Run on {cores} cores with {threads} threads; total {total} s "
            f"({', '.join(f'{k} {v} s' for k, v in timings.items())}).\n")
 out.append("Command:\n")
-out.append("```sh\ntools/run_benchmark.sh --docs   # defaults: --sequences 12 --cars-per-sequence 3 --seed 2017 --threads 2\n```\n")
+out.append(f"```sh\ntools/run_benchmark.sh --cad CACHE_DIR/cars --sequences {sequences} --cars-per-sequence {cars} --seed {seed} --threads {threads} --docs\n```\n")
 out.append("## Targets (issue 4)\n")
 out.append("| target | measured | |\n|---|---|---|")
 for name, value, verdict in rows:
