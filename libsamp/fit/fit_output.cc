@@ -155,6 +155,7 @@ nlohmann::json FitOptionsToJson(const FitOptions& o) {
   j["sigma_ground"] = o.sigma_ground;
   j["shape_prior_weight"] = o.shape_prior_weight;
   j["standing_speed"] = o.standing_speed;
+  j["max_motion_off_axis"] = o.max_motion_off_axis;
   j["straight_yaw_rate"] = o.straight_yaw_rate;
   j["motion_noise"] = {{"speed_noise", o.motion_noise.speed_noise},
                        {"yaw_rate_noise", o.motion_noise.yaw_rate_noise},

@@ -143,6 +143,8 @@ bool FitOptions::Check() const {
       << "FitOptions.shape_prior_weight must be >= 0";
   SAMP_CHECK(std::isfinite(standing_speed) && standing_speed >= 0.0)
       << "FitOptions.standing_speed must be >= 0";
+  SAMP_CHECK(max_motion_off_axis > 0.0 && max_motion_off_axis <= M_PI / 2)
+      << "FitOptions.max_motion_off_axis must be in (0, pi/2]";
   SAMP_CHECK(std::isfinite(straight_yaw_rate) && straight_yaw_rate >= 0.0)
       << "FitOptions.straight_yaw_rate must be >= 0";
   motion_noise.Check();
@@ -197,22 +199,34 @@ InitialState InitializeTrack(const Track& track, const FitOptions& options) {
     }
   }
   const double speed = Median(speeds);
-  init.standing = num_frames < 2 || speed < options.standing_speed;
-  // Reference orientation.
-  double reference;
-  if (init.standing) {
-    // Axis by the doubled-angle mean, direction by the majority of detections.
+  // The detections' orientation: axis by the doubled-angle mean, direction by
+  // the majority of detections.
+  double detected_yaw;
+  {
     double sx = 0, sy = 0;
     for (double y : detection_yaws) {
       sx += std::cos(2 * y);
       sy += std::sin(2 * y);
     }
-    reference = 0.5 * std::atan2(sy, sx);
+    detected_yaw = 0.5 * std::atan2(sy, sx);
     int agree = 0;
-    for (double y : detection_yaws) agree += std::abs(WrapAngle(y - reference)) <= M_PI / 2 ? 1 : -1;
-    if (agree < 0) reference = WrapAngle(reference + M_PI);
-  } else {
-    reference = YawOfDirection(positions.back() - positions.front());
+    for (double y : detection_yaws) agree += std::abs(WrapAngle(y - detected_yaw)) <= M_PI / 2 ? 1 : -1;
+    if (agree < 0) detected_yaw = WrapAngle(detected_yaw + M_PI);
+  }
+  init.standing = num_frames < 2 || speed < options.standing_speed;
+  double reference = detected_yaw;
+  if (!init.standing) {
+    // A car drives along its length axis: a displacement far off the detected
+    // axis is detection noise on a standing car (far cars, where the noise of
+    // the positions exceeds standing_speed), not motion, and its direction
+    // would give the car a random heading.
+    const double motion_yaw = YawOfDirection(positions.back() - positions.front());
+    const double off_axis = std::abs(WrapAngle(motion_yaw - detected_yaw));
+    if (std::min(off_axis, M_PI - off_axis) > options.max_motion_off_axis) {
+      init.standing = true;
+    } else {
+      reference = motion_yaw;
+    }
   }
   std::vector<double> aligned(num_frames);
   for (int k = 0; k < num_frames; ++k) aligned[k] = AlignYaw(detection_yaws[k], reference);

@@ -46,6 +46,9 @@ struct FitOptions {
   // |omega| < straight_yaw_rate -> straight line (rad/s), else circular arc.
   double standing_speed = 1.0;
   double straight_yaw_rate = 0.05;
+  // Initialisation: a track whose displacement points more than this far off the
+  // detections' length axis (radians, either direction) is taken as standing.
+  double max_motion_off_axis = 0.5;
   MotionNoise motion_noise;
   // Ceres: iterations per solve, tolerances, linear solver
   // ("sparse_normal_cholesky", "dense_schur", "iterative_schur", "dense_qr").

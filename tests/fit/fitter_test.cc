@@ -65,6 +65,36 @@ TEST(Fitter, InitializationResolvesFlipsAndArc) {
   }
 }
 
+TEST(Fitter, InitializationIgnoresOffAxisDrift) {
+  // A standing car far away: its detections drift 4 m across the car's length
+  // axis within a second (noise, 4 m/s > standing_speed). The drift must not
+  // be taken as motion, or the car would get a heading 90 degrees off.
+  const ShapeLookup lookup(Model());
+  Synthetic st = MakeTrack(lookup, 9, 0.0, 0.0, 50, 6, /*flipped_frame=*/2);
+  const Eigen::Vector3d across_in_world = Heading(0.4 + M_PI / 2);
+  for (size_t k = 0; k < st.track.frames.size(); ++k) {
+    TrackFrame& f = st.track.frames[k];
+    f.detection.position += f.world_from_camera.linear().transpose() * (0.5 * double(k) * across_in_world);
+  }
+  const InitialState init = InitializeTrack(st.track, FitOptions());
+  EXPECT_TRUE(init.standing);
+  for (size_t k = 0; k < st.track.frames.size(); ++k) {
+    EXPECT_LT(std::abs(WrapAngle(init.poses[k][3] - 0.4)), 0.2) << "frame " << k;
+  }
+  // The same drift along the length axis is motion.
+  Synthetic along = MakeTrack(lookup, 9, 0.0, 0.0, 50, 6, /*flipped_frame=*/-1);
+  for (size_t k = 0; k < along.track.frames.size(); ++k) {
+    TrackFrame& f = along.track.frames[k];
+    f.detection.position += f.world_from_camera.linear().transpose() * (0.5 * double(k) * Heading(0.4));
+  }
+  const InitialState moving = InitializeTrack(along.track, FitOptions());
+  EXPECT_FALSE(moving.standing);
+  EXPECT_LT(std::abs(WrapAngle(moving.poses[0][3] - 0.4)), 0.2);
+  FitOptions bad;
+  bad.max_motion_off_axis = 0.0;
+  EXPECT_THROW(bad.Check(), Error);
+}
+
 TEST(Fitter, RecoversShapeAndArcTrajectory) {
   FitOptions options;
   TrackFitter fitter(Model(), options);
