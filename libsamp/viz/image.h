@@ -79,6 +79,22 @@ struct TextStyle {
   bool vertical = false;          // rotated 90 degrees counter-clockwise (y-axis labels)
 };
 
+// The text colour of plots and picture labels.
+inline constexpr Rgb kTextGray{40, 40, 40};
+
+// A style in one expression, e.g. MakeTextStyle(12, HAlign::kCenter, VAlign::kMiddle, true).
+inline TextStyle MakeTextStyle(double size_px, HAlign h_align = HAlign::kLeft,
+                               VAlign v_align = VAlign::kTop, bool bold = false,
+                               Rgb color = kTextGray) {
+  TextStyle style;
+  style.size_px = size_px;
+  style.h_align = h_align;
+  style.v_align = v_align;
+  style.bold = bold;
+  style.color = color;
+  return style;
+}
+
 // Width and height in pixels of `text` drawn with `style` (unrotated).
 void MeasureText(const std::string& text, const TextStyle& style, int* width, int* height);
 // Draws one line of text anchored at (x, y) as style's alignment says.

@@ -24,7 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-constexpr Rgb kHeaderColor{40, 40, 40};
 constexpr Rgb kSubtleColor{110, 110, 110};
 constexpr Rgb kSeparatorColor{225, 225, 225};
 
@@ -50,20 +49,10 @@ std::string SigmaLabel(double k) {
   return s;
 }
 
-TextStyle Text(double size, HAlign h = HAlign::kLeft, VAlign v = VAlign::kTop, bool bold = false,
-               Rgb color = kHeaderColor) {
-  TextStyle style;
-  style.size_px = size;
-  style.h_align = h;
-  style.v_align = v;
-  style.bold = bold;
-  style.color = color;
-  return style;
-}
 
 // Shortens text with an ellipsis to fit `width` pixels.
 std::string FitText(std::string text, double size, int width) {
-  TextStyle style = Text(size);
+  TextStyle style = MakeTextStyle(size);
   int w = 0;
   MeasureText(text, style, &w, nullptr);
   if (w <= width) return text;
@@ -293,12 +282,12 @@ RgbImage RenderEigenShapeGrid(const ShapeModel& model, const PictureOptions& opt
   const int height = title_h + header_h + rows * (ch + gap) - gap + pad;
   RgbImage canvas(width, height, kWhite);
   DrawText(&canvas, "Eigen-shapes: zero level sets of \u03bc + k\u00b7\u03c3\u1d62\u00b7w\u1d62",
-           width / 2, 12, Text(20, HAlign::kCenter, VAlign::kTop, true));
+           width / 2, 12, MakeTextStyle(20, HAlign::kCenter, VAlign::kTop, true));
   const double total = model.total_variance > 0 ? model.total_variance : model.eigenvalues.sum();
   for (int c = 0; c < cols; ++c) {
     const int x = pad + label_w + c * (cw + gap);
     DrawText(&canvas, SigmaLabel(options.sigmas[c]), x + cw / 2, title_h + header_h / 2,
-             Text(16, HAlign::kCenter, VAlign::kMiddle, true));
+             MakeTextStyle(16, HAlign::kCenter, VAlign::kMiddle, true));
   }
   double cumulative = 0.0;
   for (int i = 0; i < rows; ++i) {
@@ -307,22 +296,22 @@ RgbImage RenderEigenShapeGrid(const ShapeModel& model, const PictureOptions& opt
     const double share = total > 0 ? model.eigenvalues[i] / total : 0.0;
     cumulative += share;
     DrawText(&canvas, "component " + std::to_string(i + 1), pad, y + ch / 2 - 22,
-             Text(16, HAlign::kLeft, VAlign::kMiddle, true));
+             MakeTextStyle(16, HAlign::kLeft, VAlign::kMiddle, true));
     const double rms_cm = 100.0 * Sigma(model, i) / std::sqrt(double(model.NumVoxels()));
     DrawText(&canvas, "\u03c3 = " + Fixed(Sigma(model, i), 2) + " m (" + Fixed(rms_cm, 1) + " cm/voxel)",
              pad, y + ch / 2,
-             Text(13, HAlign::kLeft, VAlign::kMiddle, false, kSubtleColor));
+             MakeTextStyle(13, HAlign::kLeft, VAlign::kMiddle, false, kSubtleColor));
     DrawText(&canvas,
              Fixed(100 * share, 1) + " % (cum. " + Fixed(100 * cumulative, 1) + " %)" +
                  (model.total_variance > 0 ? "" : "*"),
-             pad, y + ch / 2 + 20, Text(13, HAlign::kLeft, VAlign::kMiddle, false, kSubtleColor));
+             pad, y + ch / 2 + 20, MakeTextStyle(13, HAlign::kLeft, VAlign::kMiddle, false, kSubtleColor));
     for (int c = 0; c < cols; ++c) {
       PasteFitted(renders[size_t(i) * cols + c], pad + label_w + c * (cw + gap), y, cw, ch, &canvas);
     }
   }
   if (model.total_variance <= 0) {
     DrawText(&canvas, "* share of the variance kept by the R components (no total variance stored)",
-             pad, height - 4, Text(11, HAlign::kLeft, VAlign::kBottom, false, kSubtleColor));
+             pad, height - 4, MakeTextStyle(11, HAlign::kLeft, VAlign::kBottom, false, kSubtleColor));
   }
   return canvas;
 }
@@ -372,7 +361,7 @@ RgbImage RenderShapeSheet(const ShapeModel& model, const std::vector<ShapeInput>
   RgbImage canvas(width, height, kWhite);
   DrawText(&canvas, "Training shapes and their reconstruction from the manifold (R = " +
                         std::to_string(model.NumComponents()) + ")",
-           width / 2, 12, Text(20, HAlign::kCenter, VAlign::kTop, true));
+           width / 2, 12, MakeTextStyle(20, HAlign::kCenter, VAlign::kTop, true));
   bool all_cad = true;
   for (const auto& s : shapes) all_cad = all_cad && s.kind == "cad";
   const std::string headers[cols] = {all_cad ? "CAD model" : "original",
@@ -380,7 +369,7 @@ RgbImage RenderShapeSheet(const ShapeModel& model, const std::vector<ShapeInput>
                                      "code z\u1d62 / \u03c3\u1d62"};
   for (int c = 0; c < cols; ++c) {
     DrawText(&canvas, headers[c], pad + label_w + c * (cw + gap) + cw / 2, title_h + header_h / 2,
-             Text(16, HAlign::kCenter, VAlign::kMiddle, true));
+             MakeTextStyle(16, HAlign::kCenter, VAlign::kMiddle, true));
   }
   std::vector<std::string> categories;
   for (int i = 0; i < model.NumComponents(); ++i) categories.push_back(std::to_string(i + 1));
@@ -398,9 +387,9 @@ RgbImage RenderShapeSheet(const ShapeModel& model, const std::vector<ShapeInput>
     const int y = title_h + header_h + s * (row_h + gap);
     if (s > 0) DrawLine(&canvas, pad, y - gap / 2.0, width - pad, y - gap / 2.0, kSeparatorColor, 1);
     DrawText(&canvas, FitText(shapes[s].name, 15, label_w - 8), pad, y + ch / 2,
-             Text(15, HAlign::kLeft, VAlign::kMiddle, true));
+             MakeTextStyle(15, HAlign::kLeft, VAlign::kMiddle, true));
     DrawText(&canvas, shapes[s].kind == "cad" ? "CAD file" : "SDF file", pad, y + ch / 2 + 20,
-             Text(12, HAlign::kLeft, VAlign::kMiddle, false, kSubtleColor));
+             MakeTextStyle(12, HAlign::kLeft, VAlign::kMiddle, false, kSubtleColor));
     const int x0 = pad + label_w;
     PasteFitted(renders[2 * s], x0, y, cw, ch, &canvas);
     PasteFitted(RenderSdfSlice(model.grid, shapes[s].sdf, slice_scale), x0 + (cw + gap), y + 8, cw,
@@ -408,7 +397,7 @@ RgbImage RenderShapeSheet(const ShapeModel& model, const std::vector<ShapeInput>
     PasteFitted(renders[2 * s + 1], x0 + 2 * (cw + gap), y, cw, ch, &canvas);
     DrawText(&canvas, "RMS SDF error near the surface " + Fixed(100 * rms_near[s], 2) + " cm",
              x0 + 2 * (cw + gap) + cw / 2, y + ch + foot_h / 2,
-             Text(12, HAlign::kCenter, VAlign::kMiddle, false, kSubtleColor));
+             MakeTextStyle(12, HAlign::kCenter, VAlign::kMiddle, false, kSubtleColor));
     BarSeries code;
     for (int i = 0; i < codes[s].size(); ++i) {
       const double sigma = Sigma(model, i);

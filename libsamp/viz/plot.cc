@@ -75,7 +75,6 @@ namespace {
 constexpr int kSupersample = 2;
 constexpr Rgb kAxisColor{90, 90, 90};
 constexpr Rgb kGridColor{232, 232, 232};
-constexpr Rgb kTextColor{40, 40, 40};
 // Automatic line-plot ranges leave this share of the data range free at each end.
 constexpr double kDataPadding = 0.03;
 
@@ -148,15 +147,6 @@ struct AxisText {
   double font_px = 15.0;                   // output pixels
 };
 
-TextStyle Style(double size, HAlign h, VAlign v, bool bold = false, Rgb color = kTextColor) {
-  TextStyle style;
-  style.size_px = size;
-  style.h_align = h;
-  style.v_align = v;
-  style.bold = bold;
-  style.color = color;
-  return style;
-}
 
 int TextWidth(const std::string& text, double size, bool bold = false) {
   TextStyle style;
@@ -241,12 +231,12 @@ void DrawAxes(const AxisText& text, Frame* frame) {
     const double y = frame->Py(text.y_ticks[i]);
     DrawLine(c, frame->left - kTickLength, y, frame->left, y, kAxisColor, s);
     DrawText(c, y_labels[i], frame->left - kTickLength - kGap, int(std::lround(y)),
-             Style(font, HAlign::kRight, VAlign::kMiddle));
+             MakeTextStyle(font, HAlign::kRight, VAlign::kMiddle));
   }
   for (size_t i = 0; i < text.x_ticks.size() && i < x_labels.size(); ++i) {
     const double x = frame->Px(text.x_ticks[i]);
     DrawLine(c, x, frame->bottom, x, frame->bottom + kTickLength, kAxisColor, s);
-    TextStyle style = Style(font, HAlign::kCenter, VAlign::kTop);
+    TextStyle style = MakeTextStyle(font, HAlign::kCenter, VAlign::kTop);
     style.vertical = text.vertical_x_labels;
     DrawText(c, x_labels[i], int(std::lround(x)), frame->bottom + kTickLength + kGap, style);
   }
@@ -257,14 +247,14 @@ void DrawAxes(const AxisText& text, Frame* frame) {
   DrawLine(c, frame->left, frame->top, frame->left, frame->bottom, kAxisColor, s);
   if (!text.title.empty()) {
     DrawText(c, text.title, (frame->left + frame->right) / 2, kPad,
-             Style(title_font, HAlign::kCenter, VAlign::kTop, /*bold=*/true));
+             MakeTextStyle(title_font, HAlign::kCenter, VAlign::kTop, /*bold=*/true));
   }
   if (!text.x_label.empty()) {
     DrawText(c, text.x_label, (frame->left + frame->right) / 2, c->height - kPad,
-             Style(label_font, HAlign::kCenter, VAlign::kBottom));
+             MakeTextStyle(label_font, HAlign::kCenter, VAlign::kBottom));
   }
   if (!text.y_label.empty()) {
-    TextStyle style = Style(label_font, HAlign::kLeft, VAlign::kMiddle);
+    TextStyle style = MakeTextStyle(label_font, HAlign::kLeft, VAlign::kMiddle);
     style.vertical = true;
     DrawText(c, text.y_label, kPad, (frame->top + frame->bottom) / 2, style);
   }
@@ -450,7 +440,7 @@ void DrawLegend(const std::vector<LegendEntry>& entries, LegendPosition position
       for (int i : rows[r]) {
         DrawSwatch(&mat, entries[i], x, cy, g.sample, font);
         DrawText(&frame->canvas, entries[i].label, int(x + g.sample + g.gap), int(std::lround(cy)),
-                 Style(font, HAlign::kLeft, VAlign::kMiddle));
+                 MakeTextStyle(font, HAlign::kLeft, VAlign::kMiddle));
         x += g.item_widths[i] + spacing;
       }
     }
@@ -467,7 +457,7 @@ void DrawLegend(const std::vector<LegendEntry>& entries, LegendPosition position
     const double x0 = box.x + g.gap;
     DrawSwatch(&mat, entries[i], x0, cy, g.sample, font);
     DrawText(&frame->canvas, entries[i].label, int(x0 + g.sample + g.gap), int(std::lround(cy)),
-             Style(font, HAlign::kLeft, VAlign::kMiddle));
+             MakeTextStyle(font, HAlign::kLeft, VAlign::kMiddle));
   }
 }
 
@@ -710,7 +700,7 @@ RgbImage DrawBarPlot(const std::vector<std::string>& categories,
         const double size = std::max(8.0 * s, 0.8 * frame.font);
         DrawText(&frame.canvas, buffer, int(std::lround(cx)),
                  int(std::lround(v >= 0 ? label_y - 3 * s : label_y + 3 * s)),
-                 Style(size, HAlign::kCenter, v >= 0 ? VAlign::kBottom : VAlign::kTop, false,
+                 MakeTextStyle(size, HAlign::kCenter, v >= 0 ? VAlign::kBottom : VAlign::kTop, false,
                        kDarkGray));
       }
     }
