@@ -1,7 +1,6 @@
 #include "libsamp/model/pca.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
@@ -12,14 +11,13 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/model/gram.h"
 
 namespace samp {
 namespace {
 
-// Rows (voxels) are processed in blocks of this many: a block of centred
-// samples (kBlockRows x N floats) stays in cache-friendly GEMM panels and the
-// D x N centred matrix is never materialised.
-constexpr Eigen::Index kBlockRows = 2048;
+// Rows (voxels) per block of the mean: their double sums stay in L1.
+constexpr Eigen::Index kMeanBlockRows = 2048;
 
 // Below this many samples the dense eigensolver is used: it is exact, fast at
 // that size, and Spectra's Lanczos gains nothing (and needs ncv > R).
@@ -46,45 +44,40 @@ PcaResult ComputePca(const Eigen::MatrixXf& samples, const PcaOptions& options) 
                                     << ") exceeds the dimension " << dim;
 
   PcaResult result;
-  const Eigen::Index num_blocks = (dim + kBlockRows - 1) / kBlockRows;
-  const tbb::blocked_range<Eigen::Index> blocks(0, num_blocks, 1);
+  const GramKernel kernel = BestGramKernel();
+  LogDebug() << "PCA: D = " << dim << ", N = " << num_samples << ", R = " << num_components
+             << ", Gram kernel " << GramKernelName(kernel);
 
-  // Mean, accumulated in double per row; also checks that every value is finite.
+  // Mean, accumulated in double per row over blocks of rows (the block's sums
+  // stay in L1 while the columns stream past); a non-finite sum means a
+  // non-finite value (a double sum of finite floats cannot overflow).
   result.mean.resize(dim);
-  tbb::parallel_for(blocks, [&](const tbb::blocked_range<Eigen::Index>& range) {
-    for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
-      const Eigen::Index row0 = b * kBlockRows;
-      const Eigen::Index rows = std::min(kBlockRows, dim - row0);
-      const auto block = samples.middleRows(row0, rows);
-      SAMP_CHECK(block.allFinite()) << "PCA: samples contain non-finite values (rows " << row0
-                                    << ".." << row0 + rows - 1 << ")";
-      result.mean.segment(row0, rows) =
-          (block.cast<double>().rowwise().sum() / double(num_samples)).cast<float>();
-    }
-  });
+  const float* x = samples.data();
+  tbb::parallel_for(
+      tbb::blocked_range<Eigen::Index>(0, (dim + kMeanBlockRows - 1) / kMeanBlockRows, 1),
+      [&](const tbb::blocked_range<Eigen::Index>& range) {
+        double sums[kMeanBlockRows];
+        for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
+          const Eigen::Index row0 = b * kMeanBlockRows;
+          const Eigen::Index rows = std::min(kMeanBlockRows, dim - row0);
+          std::fill(sums, sums + rows, 0.0);
+          for (Eigen::Index n = 0; n < num_samples; ++n) {
+            const float* column = x + n * dim + row0;
+            for (Eigen::Index i = 0; i < rows; ++i) sums[i] += double(column[i]);
+          }
+          for (Eigen::Index i = 0; i < rows; ++i) {
+            SAMP_CHECK(std::isfinite(sums[i]))
+                << "PCA: samples contain non-finite values (row " << row0 + i << ")";
+            result.mean[row0 + i] = float(sums[i] / double(num_samples));
+          }
+        }
+      });
 
-  // Gram matrix of the centred samples, G = Xc^T Xc / (N - 1) (N x N): each
-  // thread accumulates the lower triangle over its row blocks with a float
-  // rank update (GEMM), summed in double.
-  tbb::combinable<Eigen::MatrixXd> gram_parts(
-      [&] { return Eigen::MatrixXd::Zero(num_samples, num_samples).eval(); });
-  tbb::parallel_for(blocks, [&](const tbb::blocked_range<Eigen::Index>& range) {
-    Eigen::MatrixXf centred;
-    Eigen::MatrixXf block_gram(num_samples, num_samples);
-    Eigen::MatrixXd& gram = gram_parts.local();
-    for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
-      const Eigen::Index row0 = b * kBlockRows;
-      const Eigen::Index rows = std::min(kBlockRows, dim - row0);
-      centred = samples.middleRows(row0, rows).colwise() - result.mean.segment(row0, rows);
-      block_gram.setZero();
-      block_gram.selfadjointView<Eigen::Lower>().rankUpdate(centred.transpose());
-      gram.triangularView<Eigen::Lower>() += block_gram.cast<double>();
-    }
-  });
-  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(num_samples, num_samples);
-  gram_parts.combine_each([&](const Eigen::MatrixXd& part) { gram += part; });
+  // Gram matrix of the centred samples, G = Xc^T Xc / (N - 1) (N x N), with
+  // the blocked float kernel summing in double across blocks (gram.h).
+  Eigen::MatrixXd gram(num_samples, num_samples);
+  CentredGram(x, dim, num_samples, result.mean.data(), gram.data(), kernel);
   gram /= double(num_samples - 1);
-  gram = gram.selfadjointView<Eigen::Lower>();  // full symmetric matrix
   result.total_variance = gram.trace();
 
   // Top R eigenpairs of G.
@@ -130,21 +123,14 @@ PcaResult ComputePca(const Eigen::MatrixXf& samples, const PcaOptions& options) 
   result.eigenvalues = eigenvalues;
 
   // Principal directions W = Xc V diag(1 / sqrt((N - 1) lambda)): the columns of
-  // Xc V have squared norms (N - 1) lambda. Computed per row block in double.
+  // Xc V have squared norms (N - 1) lambda. Float products summed in double
+  // (gram.h), like the Gram matrix.
   const Eigen::MatrixXd projection =
       eigenvectors *
       (eigenvalues * double(num_samples - 1)).cwiseSqrt().cwiseInverse().asDiagonal();
   Eigen::MatrixXd components(dim, num_components);
-  tbb::parallel_for(blocks, [&](const tbb::blocked_range<Eigen::Index>& range) {
-    for (Eigen::Index b = range.begin(); b != range.end(); ++b) {
-      const Eigen::Index row0 = b * kBlockRows;
-      const Eigen::Index rows = std::min(kBlockRows, dim - row0);
-      const Eigen::MatrixXd centred =
-          (samples.middleRows(row0, rows).colwise() - result.mean.segment(row0, rows))
-              .cast<double>();
-      components.middleRows(row0, rows).noalias() = centred * projection;
-    }
-  });
+  CentredProduct(x, dim, num_samples, result.mean.data(), projection.data(), num_components,
+                 components.data(), kernel);
   // Remove the round-off of the float Gram matrix: re-orthonormalise (modified
   // Gram-Schmidt, in order of decreasing variance, so signs and order are kept).
   for (Eigen::Index r = 0; r < num_components; ++r) {

@@ -2,6 +2,7 @@
 // and the shape model's trilinear lookups. Figures: docs/benchmarks.md.
 //
 //   pca_bench --benchmark_filter=Pca             # PCA, N = 200 / 1000
+//   pca_bench --benchmark_filter=Gram            # its Gram product, per kernel
 //   pca_bench --benchmark_filter=Evaluate        # lookups, ns per point
 #include <benchmark/benchmark.h>
 #include <tbb/global_control.h>
@@ -11,6 +12,7 @@
 #include <random>
 
 #include "libsamp/core/grid_spec.h"
+#include "libsamp/model/gram.h"
 #include "libsamp/model/pca.h"
 #include "libsamp/model/shape_model.h"
 
@@ -66,6 +68,43 @@ BENCHMARK(BM_Pca)
     ->Args({1000, 100, 1})
     ->Args({1000, 100, 0})
     ->Args({200, 50, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(3);
+
+// The Gram product alone (libsamp/model/gram.h), per kernel. Args: N, kernel
+// (0 portable, 1 AVX2, 2 AVX-512), threads (0 = all). GFLOPS counts the
+// 2 D N (N + 1) / 2 flops of the upper triangle (what the kernel must compute).
+void BM_Gram(benchmark::State& state) {
+  const int num_samples = int(state.range(0));
+  const auto kernel = static_cast<GramKernel>(state.range(1));
+  const int threads = int(state.range(2));
+  if (!GramKernelSupported(kernel)) {
+    state.SkipWithError("kernel not supported on this CPU");
+    return;
+  }
+  const GridSpec grid = GridSpec::CarDefault(0.1);
+  const int64_t dim = grid.NumVoxels();
+  const Eigen::MatrixXf& samples = SyntheticSamples(dim, num_samples);
+  const Eigen::VectorXf mean = samples.rowwise().mean();
+  std::unique_ptr<tbb::global_control> control;
+  if (threads > 0) {
+    control = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    threads);
+  }
+  Eigen::MatrixXd gram(num_samples, num_samples);
+  for (auto _ : state) {
+    CentredGram(samples.data(), dim, num_samples, mean.data(), gram.data(), kernel);
+    benchmark::DoNotOptimize(gram.data());
+  }
+  const double flops = double(dim) * num_samples * (num_samples + 1);
+  state.counters["GFLOPS"] =
+      benchmark::Counter(flops * 1e-9 * double(state.iterations()), benchmark::Counter::kIsRate);
+  state.SetLabel(GramKernelName(kernel));
+}
+BENCHMARK(BM_Gram)
+    ->ArgNames({"N", "kernel", "threads"})
+    ->ArgsProduct({{1000}, {0, 1, 2}, {1, 0}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(3);
