@@ -244,7 +244,10 @@ void CentredGram(const float* x, int64_t dim, int64_t num_samples, const float* 
   // Per block of kGramBlockDepth rows: pack the centred rows of every sample
   // twice (A panels of mr samples, B panels of nr samples), then each A panel
   // (mr rows of the Gram matrix) runs over the B panels on and right of the
-  // diagonal. The A panel stays in L1, the B panels stream from L2.
+  // diagonal: the A panel (<= 64 KB) stays in L2 while the B panels stream
+  // past, and each tile of the Gram matrix is read and written once per block.
+  // While a block is multiplied, the next one is prefetched (the packing
+  // reads short runs of many columns, which the hardware prefetcher misses).
   const int64_t num_a = CeilDiv(n, micro.mr);
   const int64_t num_b = CeilDiv(n, micro.nr);
   AlignedFloats a_packed(num_a * micro.mr * kGramBlockDepth);
@@ -264,20 +267,25 @@ void CentredGram(const float* x, int64_t dim, int64_t num_samples, const float* 
                           }
                         }
                       });
-    tbb::parallel_for(tbb::blocked_range<int64_t>(0, num_a, 1),
+    // A panel p has num_b - p * mr / nr tiles on or right of the diagonal: the
+    // tasks pair panel t with panel num_a - 1 - t for equal work.
+    const auto run_panel = [&](int64_t p) {
+      const int64_t i0 = p * micro.mr;
+      const int64_t q0 = i0 / micro.nr;  // first B panel reaching i <= j
+      const int64_t j0 = q0 * micro.nr;
+      if (d0 + depth < dim) {
+        PrefetchSamples(x, dim, n, d0 + depth, std::min(kGramBlockDepth, dim - d0 - depth), i0,
+                        micro.mr);
+      }
+      micro.row_panel(a_packed.data() + p * micro.mr * depth,
+                      b_packed.data() + q0 * micro.nr * depth, depth, num_b - q0, n - i0, n - j0,
+                      gram + j0 * n + i0, n);
+    };
+    tbb::parallel_for(tbb::blocked_range<int64_t>(0, (num_a + 1) / 2, 1),
                       [&](const tbb::blocked_range<int64_t>& range) {
-                        for (int64_t p = range.begin(); p != range.end(); ++p) {
-                          const int64_t i0 = p * micro.mr;
-                          const int64_t q0 = i0 / micro.nr;  // first B panel reaching i >= j
-                          const int64_t j0 = q0 * micro.nr;
-                          if (d0 + depth < dim) {
-                            PrefetchSamples(x, dim, n, d0 + depth,
-                                            std::min(kGramBlockDepth, dim - d0 - depth), i0,
-                                            micro.mr);
-                          }
-                          micro.row_panel(a_packed.data() + p * micro.mr * depth,
-                                          b_packed.data() + q0 * micro.nr * depth, depth,
-                                          num_b - q0, n - i0, n - j0, gram + j0 * n + i0, n);
+                        for (int64_t t = range.begin(); t != range.end(); ++t) {
+                          run_panel(t);
+                          if (num_a - 1 - t != t) run_panel(num_a - 1 - t);
                         }
                       });
   }

@@ -18,7 +18,7 @@
 namespace samp {
 
 // Depth (number of summed products) of the float partial sums.
-constexpr int64_t kGramBlockDepth = 256;
+constexpr int64_t kGramBlockDepth = 512;
 
 enum class GramKernel {
   kPortable,  // plain C++, whatever the baseline compiler flags vectorise it to
