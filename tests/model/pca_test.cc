@@ -121,6 +121,40 @@ TEST(Pca, MaximalNumberOfComponents) {
   for (int r = 1; r < 5; ++r) EXPECT_GE(result.eigenvalues[r - 1], result.eigenvalues[r]);
 }
 
+// The float Gram kernels (libsamp/model/gram.h) against a PCA in double
+// precision by SVD of the centred samples, on sizes off the kernels' tiles.
+void ExpectMatchesDoubleReference(int dim, int num_samples, int num_components) {
+  SCOPED_TRACE("D = " + std::to_string(dim) + ", N = " + std::to_string(num_samples));
+  Eigen::VectorXd variances(8);
+  variances << 9.0, 4.0, 2.0, 1.0, 0.5, 0.25, 0.125, 0.0625;
+  const Planted planted = Plant(dim, num_samples, variances, 1e-2, 21);
+  PcaOptions options;
+  options.num_components = num_components;
+  const PcaResult result = ComputePca(planted.samples, options);
+
+  const Eigen::MatrixXd x = planted.samples.cast<double>();
+  const Eigen::VectorXd mean = x.rowwise().mean();
+  const Eigen::MatrixXd centred = x.colwise() - mean;
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(centred, Eigen::ComputeThinU);
+  const double total = centred.squaredNorm() / (num_samples - 1);
+  EXPECT_NEAR(result.total_variance, total, 1e-6 * total);
+  for (int r = 0; r < num_components; ++r) {
+    const double lambda = svd.singularValues()[r] * svd.singularValues()[r] / (num_samples - 1);
+    EXPECT_NEAR(result.eigenvalues[r], lambda, 1e-5 * lambda) << "eigenvalue " << r;
+    Eigen::VectorXd u = svd.matrixU().col(r);
+    Eigen::Index arg_max = 0;
+    u.cwiseAbs().maxCoeff(&arg_max);
+    if (u[arg_max] < 0) u = -u;  // the same sign rule
+    EXPECT_GT(u.dot(result.components.col(r).cast<double>()), 1.0 - 1e-6) << "component " << r;
+  }
+}
+
+TEST(Pca, MatchesDoublePrecisionReferenceSpectra) { ExpectMatchesDoubleReference(1283, 75, 7); }
+
+TEST(Pca, MatchesDoublePrecisionReferenceDenseSolver) {
+  ExpectMatchesDoubleReference(517, 13, 5);
+}
+
 TEST(Pca, RejectsBadInput) {
   std::mt19937 rng(5);
   const Eigen::MatrixXf samples = RandomGaussian(100, 6, &rng).cast<float>();
