@@ -107,10 +107,15 @@ struct Triangle {
 // (~3e30) loses every comparison and stays finite in float.
 constexpr float kFar = 1e15f;
 
+// Squared distance and closest surface point (x, y, z) per voxel.
 struct DistanceField {
-  std::vector<float> squared;   // squared distance per voxel
-  std::vector<Vec3> closest;    // closest surface point per voxel
+  std::vector<float> squared;
+  std::vector<float> x, y, z;
 };
+
+// |p - q|^2 summed in the order of Eigen's squaredNorm (x^2 + (y^2 + z^2)),
+// so that every path gives bit-identical values.
+inline float SquaredDistance(float dx, float dy, float dz) { return dx * dx + (dy * dy + dz * dz); }
 
 // Exact distances for the voxels with k in [k_begin, k_end) within `band` of
 // the triangles in `triangles` (indices into `all`).
@@ -147,7 +152,9 @@ void SeedBand(const GridSpec& grid, const std::vector<Triangle>& all,
           const float d2 = (p - q).squaredNorm();
           if (d2 < field->squared[size_t(v)]) {
             field->squared[size_t(v)] = d2;
-            field->closest[size_t(v)] = q;
+            field->x[size_t(v)] = q.x();
+            field->y[size_t(v)] = q.y();
+            field->z[size_t(v)] = q.z();
           }
         }
       }
@@ -155,62 +162,108 @@ void SeedBand(const GridSpec& grid, const std::vector<Triangle>& all,
   }
 }
 
+// Offers voxels [i0, i1) of a row (x positions px, at y = py, z = pz) the
+// closest points (qx, qy, qz)[i] with indices first + i; keeps the first
+// strictly nearer one in best / source.
+void OfferRow(const float* __restrict px, float py, float pz, const float* __restrict qx,
+              const float* __restrict qy, const float* __restrict qz, int32_t first, int i0, int i1,
+              float* __restrict best, int32_t* __restrict source) {
+  for (int i = i0; i < i1; ++i) {
+    const float d2 = SquaredDistance(px[i] - qx[i], py - qy[i], pz - qz[i]);
+    const float b = best[i];
+    const int32_t mask = -int32_t(d2 < b);
+    best[i] = std::min(d2, b);  // d2 < b ? d2 : b
+    source[i] = ((first + i) & mask) | (source[i] & ~mask);
+  }
+}
+
 // One raster pass of closest-point propagation: forward (direction = +1)
 // visits voxels in increasing index order and offers each the closest points
-// of its 13 neighbours visited before it; backward mirrors it.
+// of its 13 neighbours visited before it (the first strictly nearer one in
+// kOffsets order wins); backward mirrors it. Row by row: the 12 neighbours in
+// earlier rows are final for the row, so their best is found for the whole
+// row at once (vectorised); then the sweep along the row adds the neighbour
+// just before each voxel, which is offered first (as in a voxel-by-voxel
+// sweep over kOffsets); then a sweep back along the row.
 void PropagatePass(const GridSpec& grid, int direction, DistanceField* field) {
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   const float h = float(grid.voxel_size);
   const Vec3 origin = grid.origin.cast<float>();
-  // Neighbour offsets (di, dj, dk) that precede a voxel in increasing index order.
+  // Neighbour offsets (di, dj, dk) that precede a voxel in increasing index
+  // order; the first one is in the voxel's own row.
   static const int kOffsets[13][3] = {{-1, 0, 0},  {-1, -1, 0}, {0, -1, 0},  {1, -1, 0},
                                       {-1, -1, -1}, {0, -1, -1}, {1, -1, -1}, {-1, 0, -1},
                                       {0, 0, -1},  {1, 0, -1},  {-1, 1, -1}, {0, 1, -1},
                                       {1, 1, -1}};
-  const int64_t sx = 1, sy = nx, sz = int64_t(nx) * ny;
+  const int64_t sy = nx, sz = int64_t(nx) * ny;
   float* squared = field->squared.data();
-  Vec3* closest = field->closest.data();
+  float* cx = field->x.data();
+  float* cy = field->y.data();
+  float* cz = field->z.data();
+  // Positions along a row and the best of the earlier rows per voxel.
+  std::vector<float> px(static_cast<size_t>(nx));
+  for (int i = 0; i < nx; ++i) px[size_t(i)] = origin.x() + h * float(i);
+  std::vector<float> row_best(static_cast<size_t>(nx));
+  std::vector<int32_t> row_source(static_cast<size_t>(nx));
   for (int kk = 0; kk < nz; ++kk) {
     const int k = direction > 0 ? kk : nz - 1 - kk;
+    const float pz = origin.z() + h * float(k);
     for (int jj = 0; jj < ny; ++jj) {
       const int j = direction > 0 ? jj : ny - 1 - jj;
-      const bool interior_jk = j > 0 && j < ny - 1 && k > 0 && k < nz - 1;
+      const float py = origin.y() + h * float(j);
+      const int64_t row = sy * j + sz * k;
+      std::fill(row_best.begin(), row_best.end(), std::numeric_limits<float>::infinity());
+      std::fill(row_source.begin(), row_source.end(), -1);
+      for (int o = 1; o < 13; ++o) {
+        const int di = direction * kOffsets[o][0], dj = direction * kOffsets[o][1],
+                  dk = direction * kOffsets[o][2];
+        const int nj = j + dj, nk = k + dk;
+        if (nj < 0 || nj >= ny || nk < 0 || nk >= nz) continue;
+        const int64_t neighbour_row = sy * nj + sz * nk;
+        OfferRow(px.data(), py, pz, cx + neighbour_row + di, cy + neighbour_row + di,
+                 cz + neighbour_row + di, int32_t(neighbour_row + di), std::max(0, -di),
+                 nx - std::max(0, di), row_best.data(), row_source.data());
+      }
+      // Along the row: the voxel's own value, then the neighbour just before
+      // it, then the best of the earlier rows.
       for (int ii = 0; ii < nx; ++ii) {
         const int i = direction > 0 ? ii : nx - 1 - ii;
-        const int64_t v = i + sy * j + sz * k;
-        const Vec3 p(origin.x() + h * float(i), origin.y() + h * float(j), origin.z() + h * float(k));
+        const int64_t v = row + i;
         float best = squared[v];
         int64_t best_n = -1;
-        const bool interior = interior_jk && i > 0 && i < nx - 1;
-        for (const auto& o : kOffsets) {
-          const int di = direction * o[0], dj = direction * o[1], dk = direction * o[2];
-          if (!interior) {
-            const int ni = i + di, nj = j + dj, nk = k + dk;
-            if (ni < 0 || ni >= nx || nj < 0 || nj >= ny || nk < 0 || nk >= nz) continue;
-          }
-          const int64_t n = v + di * sx + dj * sy + dk * sz;
-          const float d2 = (p - closest[n]).squaredNorm();
+        if (ii > 0) {
+          const int64_t n = v - direction;
+          const float dx = px[size_t(i)] - cx[n], dy = py - cy[n], dz = pz - cz[n];
+          const float d2 = SquaredDistance(dx, dy, dz);
           if (d2 < best) {
             best = d2;
             best_n = n;
           }
         }
+        if (row_best[size_t(i)] < best) {
+          best = row_best[size_t(i)];
+          best_n = row_source[size_t(i)];
+        }
         if (best_n >= 0) {
           squared[v] = best;
-          closest[v] = closest[best_n];
+          cx[v] = cx[best_n];
+          cy[v] = cy[best_n];
+          cz[v] = cz[best_n];
         }
       }
       // Back along the row from the neighbour on the other side (as in
       // Danielsson's 2-D passes), so that rows are not biased to one side.
       for (int ii = nx - 2; ii >= 0; --ii) {
         const int i = direction > 0 ? ii : nx - 1 - ii;
-        const int64_t v = i + sy * j + sz * k;
+        const int64_t v = row + i;
         const int64_t n = v + direction;
-        const Vec3 p(origin.x() + h * float(i), origin.y() + h * float(j), origin.z() + h * float(k));
-        const float d2 = (p - closest[n]).squaredNorm();
+        const float dx = px[size_t(i)] - cx[n], dy = py - cy[n], dz = pz - cz[n];
+        const float d2 = SquaredDistance(dx, dy, dz);
         if (d2 < squared[v]) {
           squared[v] = d2;
-          closest[v] = closest[n];
+          cx[v] = cx[n];
+          cy[v] = cy[n];
+          cz[v] = cz[n];
         }
       }
     }
@@ -230,119 +283,369 @@ struct CarveView {
   // image that stays in cache, used for voxels far enough from the surface.
   int coarse_width = 0, coarse_height = 0;
   std::vector<float> coarse_depth;
+  // Minimum and maximum depth (inf included) over cells of kCell x kCell
+  // pixels: a block of voxels whose pixels lie in a few cells is decided at once.
+  int cell_width = 0, cell_height = 0;
+  std::vector<float> cell_min, cell_max;
 };
 
 constexpr int kCoarseStep = 4;
 constexpr int kCoarseOffset = (kCoarseStep - 1) / 2;
+constexpr int kCell = 8;
+
+// Fills the min/max depth over cells of kCell x kCell pixels.
+void BuildDepthCells(CarveView* view) {
+  const int width = view->width, height = view->height;
+  view->cell_width = (width + kCell - 1) / kCell;
+  view->cell_height = (height + kCell - 1) / kCell;
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  view->cell_min.assign(size_t(view->cell_width) * size_t(view->cell_height), kInfinity);
+  view->cell_max.assign(size_t(view->cell_width) * size_t(view->cell_height), -kInfinity);
+  // Column-wise min/max over the rows of one cell row, then over the columns of each cell.
+  std::vector<float> column_min(static_cast<size_t>(width)), column_max(static_cast<size_t>(width));
+  for (int cw = 0; cw < view->cell_height; ++cw) {
+    const int v0 = cw * kCell, v1 = std::min(height, v0 + kCell);
+    std::copy(view->depth + int64_t(v0) * width, view->depth + int64_t(v0 + 1) * width,
+              column_min.begin());
+    std::copy(column_min.begin(), column_min.end(), column_max.begin());
+    for (int v = v0 + 1; v < v1; ++v) {
+      const float* row = view->depth + int64_t(v) * width;
+      for (int u = 0; u < width; ++u) {
+        column_min[size_t(u)] = std::min(column_min[size_t(u)], row[u]);
+        column_max[size_t(u)] = std::max(column_max[size_t(u)], row[u]);
+      }
+    }
+    float* out_min = &view->cell_min[size_t(cw) * size_t(view->cell_width)];
+    float* out_max = &view->cell_max[size_t(cw) * size_t(view->cell_width)];
+    for (int u = 0; u < width; ++u) {
+      const int cu = u / kCell;
+      out_min[cu] = std::min(out_min[cu], column_min[size_t(u)]);
+      out_max[cu] = std::max(out_max[cu], column_max[size_t(u)]);
+    }
+  }
+}
+
+// A voxel not carved yet.
+struct Active {
+  Vec3 position;
+  float distance;
+  int32_t index;
+  uint8_t in_frustum;  // some view had it in its image
+  uint8_t cell;        // its 2^3 cell within its block (voxels of a cell are contiguous)
+};
+
+// A set of voxels (a block, a cell, or the near voxels of a block): a
+// segment [begin, begin + count) of the active list.
+struct Block {
+  int begin = 0, count = 0;
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // bounding box of the active voxel centres
+  float min_distance = 0.f;  // smallest distance of the active voxels
+  bool seen = false;         // some view had all of them in its image
+  bool per_voxel = false;    // voxels near the surface: always tested one by one
+};
+
+enum class BlockDecision { kUndecided, kOutOfView, kNoneCarved, kAllCarved };
+
+// Decides a set of far voxels for one view when the per-voxel rule must give
+// the same answer for each of them: every voxel samples a pixel within
+// kSampleSlack pixels of its projection (nearest pixel or coarse sample), and
+// the projections of the points of the bounding sphere of the set lie within
+// the bounds used here. Tolerances keep the decision on the safe side of float
+// rounding; whatever is not clear-cut is left to the per-voxel test.
+BlockDecision DecideBlock(const CarveView& view, const Block& block, float margin) {
+  constexpr float kDepthEps = 1e-4f;    // metres
+  constexpr float kPixelEps = 1e-2f;    // pixels
+  constexpr float kSampleSlack = 3.0f;  // pixels (the coarse sample is within 2)
+  const Vec3 centre = 0.5f * (block.lo + block.hi);
+  const float radius = 0.5f * (block.hi - block.lo).norm() * 1.0001f + 1e-6f;
+  const Vec3 pc = view.rotation * centre + view.translation;
+  const float zmin = pc.z() - radius - kDepthEps, zmax = pc.z() + radius + kDepthEps;
+  if (!(zmin > 1e-3f)) return BlockDecision::kUndecided;
+  // Every voxel far from the surface (the plane test of near voxels is per voxel).
+  if (!(block.min_distance > view.lateral_per_depth * zmax)) return BlockDecision::kUndecided;
+  // For p = centre + d, |d| <= radius: |x/z - xc/zc| <= radius * |(zc, xc)| / (zc * zmin).
+  const float inv_z = 1.0f / pc.z();
+  const float u = view.fx * pc.x() * inv_z + view.cx;
+  const float w = view.fy * pc.y() * inv_z + view.cy;
+  const float spread = radius * inv_z / zmin;
+  const float du = view.fx * spread * std::sqrt(pc.z() * pc.z() + pc.x() * pc.x()) + kPixelEps;
+  const float dw = view.fy * spread * std::sqrt(pc.z() * pc.z() + pc.y() * pc.y()) + kPixelEps;
+  const float u_max = float(view.width) - 0.5f, w_max = float(view.height) - 0.5f;
+  // No voxel in the image: none carved, and none gets into the frustum.
+  if (u + du < -0.5f || w + dw < -0.5f || u - du >= u_max || w - dw >= w_max) {
+    return BlockDecision::kOutOfView;
+  }
+  const bool all_in_image = u - du >= -0.5f && w - dw >= -0.5f && u + du < u_max && w + dw < w_max;
+  // Partly in the image: which voxels enter the frustum is per voxel.
+  if (!all_in_image && !block.seen) return BlockDecision::kUndecided;
+  const float last_u = float(view.width - 1), last_w = float(view.height - 1);
+  const int cu0 = int(std::clamp(u - du - kSampleSlack, 0.0f, last_u)) / kCell;
+  const int cu1 = int(std::clamp(u + du + kSampleSlack, 0.0f, last_u)) / kCell;
+  const int cw0 = int(std::clamp(w - dw - kSampleSlack, 0.0f, last_w)) / kCell;
+  const int cw1 = int(std::clamp(w + dw + kSampleSlack, 0.0f, last_w)) / kCell;
+  float lowest = std::numeric_limits<float>::infinity(), highest = 0.0f;
+  for (int cw = cw0; cw <= cw1; ++cw) {
+    const size_t row = size_t(cw) * size_t(view.cell_width);
+    for (int cu = cu0; cu <= cu1; ++cu) {
+      lowest = std::min(lowest, view.cell_min[row + size_t(cu)]);
+      highest = std::max(highest, view.cell_max[row + size_t(cu)]);
+    }
+  }
+  // Not carved (and all in the image, or seen before): every sampled depth
+  // is finite and at most margin in front of the voxel.
+  if (highest <= zmin + margin) return BlockDecision::kNoneCarved;
+  // Carved: every voxel in the image and in front of every sampled depth (or a miss).
+  if (all_in_image && lowest - margin > zmax) return BlockDecision::kAllCarved;
+  return BlockDecision::kUndecided;
+}
+
+// The per-voxel carving rule of one view (docs/sdf.md), in two steps so that
+// the depth (and triangle) loads of a run of voxels are in flight together:
+// Probe projects a voxel, records whether it is in the view's image, and
+// prefetches what Carved will read.
+class VoxelCarver {
+ public:
+  struct Probe {
+    const float* sample;  // the depth sample that decides a far voxel
+    int32_t pixel;        // nearest pixel
+    float z;              // camera depth
+    bool in_image;
+    bool near;            // within the lateral tolerance of the surface
+  };
+
+  VoxelCarver(const CarveView& view, const std::vector<Triangle>& triangles,
+              const std::vector<int32_t>& triangle_index, float voxel_size, float margin)
+      : view_(view),
+        triangles_(triangles),
+        triangle_index_(triangle_index),
+        margin_(margin),
+        behind_guard_(voxel_size),
+        on_plane_(1e-5f * voxel_size),
+        u_max_(float(view.width) - 0.5f),
+        w_max_(float(view.height) - 0.5f),
+        cu_max_(float(view.coarse_width)),
+        cw_max_(float(view.coarse_height)) {}
+
+  Probe Project(Active* voxel) const {
+    const CarveView& view = view_;
+    const Vec3 pc = view.rotation * voxel->position + view.translation;
+    Probe probe;
+    probe.z = std::max(pc.z(), 1e-6f);
+    const float inv_z = 1.0f / probe.z;
+    const float u = view.fx * pc.x() * inv_z + view.cx;
+    const float w = view.fy * pc.y() * inv_z + view.cy;
+    // Nearest pixel centre (centres at integer coordinates).
+    probe.in_image = (pc.z() > 1e-6f) & (u >= -0.5f) & (w >= -0.5f) & (u < u_max_) & (w < w_max_);
+    voxel->in_frustum |= uint8_t(probe.in_image);
+    const float uc = std::clamp(u, 0.0f, u_max_ - 0.5f);
+    const float wc = std::clamp(w, 0.0f, w_max_ - 0.5f);
+    probe.pixel = int(wc + 0.5f) * view.width + int(uc + 0.5f);
+    // The nearest coarse sample, within kCoarseStep / 2 pixels per axis.
+    const float cu = (uc - float(kCoarseOffset)) * (1.0f / kCoarseStep) + 0.5f;
+    const float cw = (wc - float(kCoarseOffset)) * (1.0f / kCoarseStep) + 0.5f;
+    const float lateral = view.lateral_per_depth * probe.z;
+    const bool coarse = (voxel->distance > kCoarseStep * lateral) & (cu >= 0.0f) & (cw >= 0.0f) &
+                        (cu < cu_max_) & (cw < cw_max_);
+    probe.sample =
+        coarse ? &view.coarse_depth[size_t(std::max(0, int(cw))) * size_t(view.coarse_width) +
+                                    size_t(std::max(0, int(cu)))]
+               : &view.depth[probe.pixel];
+    probe.near = !(voxel->distance > lateral);
+    __builtin_prefetch(probe.sample);
+    if (probe.near) __builtin_prefetch(&view.triangle[probe.pixel]);
+    return probe;
+  }
+
+  bool Carved(const Active& voxel, const Probe& probe) const {
+    constexpr float kInfinity = std::numeric_limits<float>::infinity();
+    const float observed = *probe.sample;
+    if (!probe.near) {
+      // Far enough from the surface that the sampled ray and the voxel's own
+      // ray cannot disagree about it (docs/sdf.md).
+      return probe.in_image & ((observed == kInfinity) | (probe.z < observed - margin_));
+    }
+    if (!(probe.in_image && observed < kInfinity && probe.z < observed + behind_guard_)) {
+      return false;
+    }
+    // Near the surface: in front of the plane of the triangle the pixel saw,
+    // on the camera's side.
+    const int32_t t = view_.triangle[probe.pixel];
+    if (t < 0 || size_t(t) >= triangle_index_.size() || triangle_index_[size_t(t)] < 0) return false;
+    const Triangle& tri = triangles_[size_t(triangle_index_[size_t(t)])];
+    const float side_camera = tri.normal.dot(view_.camera_center) - tri.offset;
+    const float side_voxel = tri.normal.dot(voxel.position) - tri.offset;
+    // A voxel on the plane (within rounding) counts as in front: it is on the
+    // surface, and must not be inside.
+    return side_camera > 0.0f   ? side_voxel > margin_ - on_plane_
+           : side_camera < 0.0f ? side_voxel < on_plane_ - margin_
+                                : false;
+  }
+
+  // Tests the voxels voxels[which[0..n)] (n <= 64): carved[which[i]] = result.
+  void Test(Active* voxels, const int* which, int n, uint8_t* carved) const {
+    Probe probes[64];
+    for (int a = 0; a < n; ++a) probes[a] = Project(&voxels[which[a]]);
+    for (int a = 0; a < n; ++a) carved[which[a]] = uint8_t(Carved(voxels[which[a]], probes[a]));
+  }
+
+  // Tests the voxels [begin, end), moving the uncarved ones (in order) to
+  // out; returns how many.
+  int CarveRun(Active* begin, Active* end, Active* out) const {
+    constexpr int kBatch = 64;
+    Probe probes[kBatch];
+    int kept = 0;
+    for (Active* batch = begin; batch < end; batch += kBatch) {
+      const int n = int(std::min<ptrdiff_t>(kBatch, end - batch));
+      for (int a = 0; a < n; ++a) probes[a] = Project(&batch[a]);
+      for (int a = 0; a < n; ++a) {
+        const bool carved = Carved(batch[a], probes[a]);
+        out[kept] = batch[a];
+        kept += int(!carved);
+      }
+    }
+    return kept;
+  }
+
+ private:
+  const CarveView& view_;
+  const std::vector<Triangle>& triangles_;
+  const std::vector<int32_t>& triangle_index_;
+  const float margin_, behind_guard_, on_plane_;
+  const float u_max_, w_max_, cu_max_, cw_max_;
+};
+
+constexpr int kBlock = 4;  // voxels per block edge; its cells have 2 voxels per edge
+
+// Bounding box and smallest distance of the voxels [begin, end).
+void Bound(const Active* begin, const Active* end, Block* block) {
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  block->lo = Vec3::Constant(kInfinity);
+  block->hi = Vec3::Constant(-kInfinity);
+  block->min_distance = kInfinity;
+  for (const Active* voxel = begin; voxel != end; ++voxel) {
+    block->lo = block->lo.cwiseMin(voxel->position);
+    block->hi = block->hi.cwiseMax(voxel->position);
+    block->min_distance = std::min(block->min_distance, voxel->distance);
+  }
+}
 
 // Carves the voxels with k in [k_begin, k_end): sets outside[v] = 1 for the
 // voxels some view sees in front of the surface, or that no view sees.
 void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
                const std::vector<Triangle>& triangles, const std::vector<int32_t>& triangle_index,
-               const std::vector<float>& distance, const SdfOptions& options, int k_begin,
-               int k_end, std::vector<uint8_t>* outside) {
+               const std::vector<float>& distance, float near_distance, const SdfOptions& options,
+               int k_begin, int k_end, std::vector<uint8_t>* outside) {
   const float h = float(grid.voxel_size);
   const Vec3 origin = grid.origin.cast<float>();
   const float margin = float(options.carve_margin);
-  // Near the surface the pixel's triangle plane decides, unless the voxel is
-  // this far behind the observed depth.
-  const float behind_guard = h;
-  const float on_plane = 1e-5f * h;
   const int nx = grid.dims.x(), ny = grid.dims.y();
 
-  const size_t num_triangles = triangle_index.size();
-  constexpr float kInfinity = std::numeric_limits<float>::infinity();
-  constexpr int kTile = 8;
-  // A voxel not carved yet.
-  struct Active {
-    Vec3 position;
-    float distance;
-    int32_t index;
-    int32_t in_frustum;
-  };
+  // Blocks of kBlock^3 voxels in raster order, their voxels ordered by cell;
+  // the voxels of each block that may be near the surface for some view form
+  // a block of their own, tested voxel by voxel.
   std::vector<Active> active;
-  active.reserve(kTile * kTile * kTile);
-  // Tiles of 8^3 voxels: a tile projects onto a small patch of each depth
-  // image, which keeps the lookups in cache. The inner loop is branch-free
-  // except for the (rare) voxels near the surface.
-  for (int tk = k_begin; tk < k_end; tk += kTile) {
-    for (int tj = 0; tj < ny; tj += kTile) {
-      for (int ti = 0; ti < nx; ti += kTile) {
-        active.clear();
-        for (int k = tk; k < std::min(k_end, tk + kTile); ++k) {
-          for (int j = tj; j < std::min(ny, tj + kTile); ++j) {
-            for (int i = ti; i < std::min(nx, ti + kTile); ++i) {
-              const int64_t v = grid.Index(i, j, k);
-              (*outside)[size_t(v)] = 1;  // until found uncarved below
-              active.push_back({Vec3(origin.x() + h * float(i), origin.y() + h * float(j),
-                                     origin.z() + h * float(k)),
-                                distance[size_t(v)], int32_t(v), 0});
-            }
-          }
-        }
-        for (const CarveView& view : views) {
-          size_t kept = 0;
-          const float u_max = float(view.width) - 0.5f, w_max = float(view.height) - 0.5f;
-          const float cu_max = float(view.coarse_width), cw_max = float(view.coarse_height);
-          for (size_t a = 0; a < active.size(); ++a) {
-            Active voxel = active[a];
-            const Vec3 pc = view.rotation * voxel.position + view.translation;
-            const float z = std::max(pc.z(), 1e-6f);
-            const float inv_z = 1.0f / z;
-            const float u = view.fx * pc.x() * inv_z + view.cx;
-            const float w = view.fy * pc.y() * inv_z + view.cy;
-            // Nearest pixel centre (centres at integer coordinates).
-            const bool in_image =
-                (pc.z() > 1e-6f) & (u >= -0.5f) & (w >= -0.5f) & (u < u_max) & (w < w_max);
-            voxel.in_frustum |= int32_t(in_image);
-            const float uc = std::clamp(u, 0.0f, u_max - 0.5f);
-            const float wc = std::clamp(w, 0.0f, w_max - 0.5f);
-            const int64_t pixel = int64_t(int(wc + 0.5f)) * view.width + int(uc + 0.5f);
-            // The nearest coarse sample, within kCoarseStep / 2 pixels per axis.
-            const float cu = (uc - float(kCoarseOffset)) * (1.0f / kCoarseStep) + 0.5f;
-            const float cw = (wc - float(kCoarseOffset)) * (1.0f / kCoarseStep) + 0.5f;
-            const float lateral = view.lateral_per_depth * z;
-            const bool coarse = (voxel.distance > kCoarseStep * lateral) & (cu >= 0.0f) &
-                                (cw >= 0.0f) & (cu < cu_max) & (cw < cw_max);
-            const float* sample =
-                coarse ? &view.coarse_depth[size_t(std::max(0, int(cw))) * size_t(view.coarse_width) +
-                                            size_t(std::max(0, int(cu)))]
-                       : &view.depth[pixel];
-            const float observed = *sample;
-            bool carved;
-            if (voxel.distance > lateral) {
-              // Far enough from the surface that the sampled ray and the
-              // voxel's own ray cannot disagree about it (docs/sdf.md).
-              carved = in_image & ((observed == kInfinity) | (z < observed - margin));
-            } else {
-              carved = false;
-              if (in_image && observed < kInfinity && z < observed + behind_guard) {
-                // Near the surface: in front of the plane of the triangle the
-                // pixel saw, on the camera's side.
-                const int32_t t = view.triangle[pixel];
-                if (t >= 0 && size_t(t) < num_triangles && triangle_index[size_t(t)] >= 0) {
-                  const Triangle& tri = triangles[size_t(triangle_index[size_t(t)])];
-                  const float side_camera = tri.normal.dot(view.camera_center) - tri.offset;
-                  const float side_voxel = tri.normal.dot(voxel.position) - tri.offset;
-                  // A voxel on the plane (within rounding) counts as in
-                  // front: it is on the surface, and must not be inside.
-                  carved = side_camera > 0.0f   ? side_voxel > margin - on_plane
-                           : side_camera < 0.0f ? side_voxel < on_plane - margin
-                                                : false;
-                }
+  active.reserve(size_t(nx) * size_t(ny) * size_t(std::max(0, k_end - k_begin)));
+  std::vector<Block> blocks;
+  std::vector<Active> near;
+  for (int bk = k_begin; bk < k_end; bk += kBlock) {
+    for (int bj = 0; bj < ny; bj += kBlock) {
+      for (int bi = 0; bi < nx; bi += kBlock) {
+        Block block;
+        block.begin = int(active.size());
+        near.clear();
+        for (int cell = 0; cell < 8; ++cell) {
+          const int ck = bk + 2 * (cell >> 2), cj = bj + 2 * ((cell >> 1) & 1), ci = bi + 2 * (cell & 1);
+          for (int k = ck; k < std::min(k_end, ck + 2); ++k) {
+            for (int j = cj; j < std::min(ny, cj + 2); ++j) {
+              for (int i = ci; i < std::min(nx, ci + 2); ++i) {
+                const int64_t v = grid.Index(i, j, k);
+                (*outside)[size_t(v)] = 1;  // until found uncarved below
+                const Active voxel{Vec3(origin.x() + h * float(i), origin.y() + h * float(j),
+                                        origin.z() + h * float(k)),
+                                   distance[size_t(v)], int32_t(v), 0, uint8_t(cell)};
+                (voxel.distance <= near_distance ? near : active).push_back(voxel);
               }
             }
-            active[kept] = voxel;
-            kept += size_t(!carved);
           }
-          active.resize(kept);
-          if (kept == 0) break;
         }
-        // Uncarved voxels are inside, unless no view can see them.
-        for (const Active& voxel : active) {
-          (*outside)[size_t(voxel.index)] = voxel.in_frustum ? 0 : 1;
+        block.count = int(active.size()) - block.begin;
+        if (block.count > 0) {
+          Bound(&active[size_t(block.begin)], active.data() + active.size(), &block);
+          blocks.push_back(block);
+        }
+        if (!near.empty()) {
+          Block near_block;
+          near_block.begin = int(active.size());
+          near_block.count = int(near.size());
+          near_block.per_voxel = true;
+          active.insert(active.end(), near.begin(), near.end());
+          blocks.push_back(near_block);
         }
       }
+    }
+  }
+
+  // View by view (its depth image stays in cache): each view first tries to
+  // decide each block as a whole, then each 2^3 cell of an undecided block
+  // (DecideBlock); the rest is tested voxel by voxel.
+  int64_t remaining = int64_t(active.size());
+  for (const CarveView& view : views) {
+    if (remaining == 0) break;
+    const VoxelCarver carver(view, triangles, triangle_index, h, margin);
+    for (Block& block : blocks) {
+      if (block.count == 0) continue;
+      Active* segment = &active[size_t(block.begin)];
+      int kept = 0;
+      if (block.per_voxel) {
+        kept = carver.CarveRun(segment, segment + block.count, segment);
+      } else {
+        const BlockDecision decision = DecideBlock(view, block, margin);
+        if (decision == BlockDecision::kOutOfView) continue;
+        if (decision == BlockDecision::kNoneCarved) {
+          // All voxels are in the image (or were, for an earlier view).
+          block.seen = true;
+          continue;
+        }
+        if (decision == BlockDecision::kAllCarved) {
+          remaining -= block.count;
+          block.count = 0;
+          continue;
+        }
+        // Decide the 2^3 cells; the voxels of undecided cells are tested together.
+        uint8_t carved[kBlock * kBlock * kBlock];
+        int undecided[kBlock * kBlock * kBlock];
+        int num_undecided = 0;
+        for (int a = 0; a < block.count;) {
+          int end = a + 1;
+          while (end < block.count && segment[end].cell == segment[a].cell) ++end;
+          Block cell;
+          Bound(segment + a, segment + end, &cell);
+          cell.seen = block.seen;
+          const BlockDecision cell_decision = DecideBlock(view, cell, margin);
+          // Not carved and all in the image: they are in the frustum.
+          const uint8_t seen = uint8_t(cell_decision == BlockDecision::kNoneCarved);
+          for (; a < end; ++a) {
+            carved[a] = uint8_t(cell_decision == BlockDecision::kAllCarved);
+            segment[a].in_frustum |= seen;
+            if (cell_decision == BlockDecision::kUndecided) undecided[num_undecided++] = a;
+          }
+        }
+        carver.Test(segment, undecided, num_undecided, carved);
+        for (int a = 0; a < block.count; ++a) {
+          segment[kept] = segment[a];
+          kept += int(!carved[a]);
+        }
+        if (kept > 0 && kept < block.count) Bound(segment, segment + kept, &block);
+      }
+      remaining -= block.count - kept;
+      block.count = kept;
+    }
+  }
+  // Uncarved voxels are inside, unless no view can see them.
+  for (const Block& block : blocks) {
+    for (int a = block.begin; a < block.begin + block.count; ++a) {
+      const Active& voxel = active[size_t(a)];
+      (*outside)[size_t(voxel.index)] = (voxel.in_frustum || block.seen) ? 0 : 1;
     }
   }
 }
@@ -398,11 +701,22 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
     }
   };
 
+  auto lap = [last = start]() mutable {
+    const auto now = std::chrono::steady_clock::now();
+    const double seconds = std::chrono::duration<double>(now - last).count();
+    last = now;
+    return seconds;
+  };
+  Sdf sdf;
+  sdf.summary.setup_seconds = lap();
+
   // 1a. Exact narrow band.
   const float band = float(grid.voxel_size);
   DistanceField field;
   field.squared.assign(num_voxels, std::numeric_limits<float>::infinity());
-  field.closest.assign(num_voxels, Vec3::Constant(kFar));
+  field.x.assign(num_voxels, kFar);
+  field.y.assign(num_voxels, kFar);
+  field.z.assign(num_voxels, kFar);
   std::vector<std::vector<int32_t>> slab_triangles(static_cast<size_t>(num_slabs));
   {
     const float inv_h = float(1.0 / grid.voxel_size);
@@ -422,6 +736,8 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
     SeedBand(grid, triangles, slab_triangles[size_t(k_begin / slab)], band, k_begin, k_end, &field);
   });
 
+  sdf.summary.band_seconds = lap();
+
   // 1b. Propagation to the whole grid (serial: each pass depends on the previous voxels).
   PropagatePass(grid, +1, &field);
   PropagatePass(grid, -1, &field);
@@ -430,6 +746,8 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
   std::vector<float> distance(num_voxels);
   for (size_t v = 0; v < num_voxels; ++v) distance[v] = std::sqrt(field.squared[v]);
   field = DistanceField();
+
+  sdf.summary.propagation_seconds = lap();
 
   // 2. Sign by visibility carving.
   std::vector<CarveView> views;
@@ -465,14 +783,31 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
             row[kCoarseOffset + cu * kCoarseStep];
       }
     }
-    views.push_back(carve);
+    BuildDepthCells(&carve);
+    views.push_back(std::move(carve));
+  }
+  // Voxels within this distance of the surface may be "near" (docs/sdf.md) for
+  // some view: the largest lateral_per_depth times the largest camera depth
+  // of a grid corner (an upper bound of every voxel's depth).
+  float near_distance = 0.0f;
+  for (const CarveView& view : views) {
+    float farthest = 0.0f;
+    for (int c = 0; c < 8; ++c) {
+      const Vec3 corner(float((c & 1) ? grid.MaxCorner().x() : grid.MinCorner().x()),
+                        float((c & 2) ? grid.MaxCorner().y() : grid.MinCorner().y()),
+                        float((c & 4) ? grid.MaxCorner().z() : grid.MinCorner().z()));
+      farthest = std::max(farthest, (corner - view.camera_center).norm());
+    }
+    near_distance = std::max(near_distance, view.lateral_per_depth * farthest * 1.001f + 1e-6f);
   }
   std::vector<uint8_t> outside(num_voxels, 0);
   for_each_slab([&](int k_begin, int k_end) {
-    CarveSlab(grid, views, triangles, triangle_index, distance, options, k_begin, k_end, &outside);
+    CarveSlab(grid, views, triangles, triangle_index, distance, near_distance, options, k_begin,
+              k_end, &outside);
   });
 
-  Sdf sdf;
+  sdf.summary.carving_seconds = lap();
+
   sdf.grid = grid;
   sdf.values.resize(num_voxels);
   const float truncation = float(options.truncation);

@@ -29,7 +29,11 @@ struct SdfOptions {
 struct SdfSummary {
   double inside_fraction = 0.0;   // share of voxels with negative value
   int num_seen_triangles = 0;     // triangles the distance is measured to
-  double seconds = 0.0;
+  double seconds = 0.0;            // wall-clock time of ComputeSdf, of which:
+  double setup_seconds = 0.0;      //   checks, seen triangles
+  double band_seconds = 0.0;       //   exact narrow band (1a)
+  double propagation_seconds = 0.0;  // closest-point propagation (1b)
+  double carving_seconds = 0.0;    //   visibility carving incl. per-view tables (2)
   bool sign_ok = false;           // inside_fraction >= options.min_inside_fraction
   std::string BriefReport() const;
 };
