@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <cstdlib>
 #include <memory>
+#include <utility>
+#include <vector>
 
 #include "libsamp/core/error.h"
 #include "libsamp/model/gram_kernels.h"
@@ -91,6 +93,11 @@ class AlignedFloats {
 
 // Upper bound of the kernels' mr and nr (checked in GetMicroKernel).
 constexpr int kMaxPanelWidth = 64;
+
+// Tiles of the Gram matrix per parallel task: multiples of every kernel's mr
+// (8, 16, 32) and nr (4, 6, 12) respectively.
+constexpr int64_t kTileRows = 128;
+constexpr int64_t kTileCols = 240;
 
 int64_t CeilDiv(int64_t a, int64_t b) { return (a + b - 1) / b; }
 
@@ -188,7 +195,8 @@ const MicroKernel& GetMicroKernel(GramKernel kernel) {
       << "Gram kernel '" << GramKernelName(kernel) << "' is not supported on this CPU/build";
   const MicroKernel& micro = SelectMicroKernel(kernel);
   SAMP_CHECK(micro.mr >= 1 && micro.nr >= 1 && micro.mr <= kMaxPanelWidth &&
-             micro.nr <= kMaxPanelWidth)
+             micro.nr <= kMaxPanelWidth && kTileRows % micro.mr == 0 &&
+             kTileCols % micro.nr == 0)
       << "Gram kernel '" << GramKernelName(kernel) << "': bad tile " << micro.mr << " x "
       << micro.nr;
   return micro;
@@ -242,16 +250,22 @@ void CentredGram(const float* x, int64_t dim, int64_t num_samples, const float* 
   std::fill(gram, gram + n * n, 0.0);
 
   // Per block of kGramBlockDepth rows: pack the centred rows of every sample
-  // twice (A panels of mr samples, B panels of nr samples), then each A panel
-  // (mr rows of the Gram matrix) runs over the B panels on and right of the
-  // diagonal: the A panel (<= 64 KB) stays in L2 while the B panels stream
-  // past, and each tile of the Gram matrix is read and written once per block.
-  // While a block is multiplied, the next one is prefetched (the packing
-  // reads short runs of many columns, which the hardware prefetcher misses).
+  // twice (A panels of mr samples, B panels of nr samples), then multiply
+  // the panels tile by tile of the upper triangle (below). Each entry of the
+  // Gram matrix is read and written once per block. While a block is
+  // multiplied, the next one is prefetched (the packing reads short runs of
+  // many columns, which the hardware prefetcher misses).
   const int64_t num_a = CeilDiv(n, micro.mr);
   const int64_t num_b = CeilDiv(n, micro.nr);
   AlignedFloats a_packed(num_a * micro.mr * kGramBlockDepth);
   AlignedFloats b_packed(num_b * micro.nr * kGramBlockDepth);
+  // Tiles of kTileRows x kTileCols of the Gram matrix on or above the
+  // diagonal, the unit of parallel work: a tile's B panels (<= 480 KB) stay
+  // in L2 while its A panels pass over them.
+  std::vector<std::pair<int64_t, int64_t>> tiles;
+  for (int64_t tj = 0; tj * kTileCols < n; ++tj)
+    for (int64_t ti = 0; ti * kTileRows < std::min(n, (tj + 1) * kTileCols); ++ti)
+      tiles.emplace_back(ti, tj);
   for (int64_t d0 = 0; d0 < dim; d0 += kGramBlockDepth) {
     const int64_t depth = std::min(kGramBlockDepth, dim - d0);
     tbb::parallel_for(tbb::blocked_range<int64_t>(0, num_a + num_b, 8),
@@ -267,25 +281,28 @@ void CentredGram(const float* x, int64_t dim, int64_t num_samples, const float* 
                           }
                         }
                       });
-    // A panel p has num_b - p * mr / nr tiles on or right of the diagonal: the
-    // tasks pair panel t with panel num_a - 1 - t for equal work.
-    const auto run_panel = [&](int64_t p) {
-      const int64_t i0 = p * micro.mr;
-      const int64_t q0 = i0 / micro.nr;  // first B panel reaching i <= j
-      const int64_t j0 = q0 * micro.nr;
-      if (d0 + depth < dim) {
-        PrefetchSamples(x, dim, n, d0 + depth, std::min(kGramBlockDepth, dim - d0 - depth), i0,
-                        micro.mr);
-      }
-      micro.row_panel(a_packed.data() + p * micro.mr * depth,
-                      b_packed.data() + q0 * micro.nr * depth, depth, num_b - q0, n - i0, n - j0,
-                      gram + j0 * n + i0, n);
-    };
-    tbb::parallel_for(tbb::blocked_range<int64_t>(0, (num_a + 1) / 2, 1),
-                      [&](const tbb::blocked_range<int64_t>& range) {
-                        for (int64_t t = range.begin(); t != range.end(); ++t) {
-                          run_panel(t);
-                          if (num_a - 1 - t != t) run_panel(num_a - 1 - t);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t t = range.begin(); t != range.end(); ++t) {
+                          const int64_t i_begin = tiles[t].first * kTileRows;
+                          const int64_t i_end = std::min(n, i_begin + kTileRows);
+                          const int64_t j_begin = tiles[t].second * kTileCols;
+                          const int64_t j_end = std::min(n, j_begin + kTileCols);
+                          if (j_end == n && d0 + depth < dim) {
+                            PrefetchSamples(x, dim, n, d0 + depth,
+                                            std::min(kGramBlockDepth, dim - d0 - depth),
+                                            i_begin, int(i_end - i_begin));
+                          }
+                          const int64_t q_end = CeilDiv(j_end, micro.nr);
+                          for (int64_t i0 = i_begin; i0 < i_end; i0 += micro.mr) {
+                            // First B panel reaching i <= j.
+                            const int64_t q0 = std::max(j_begin, i0) / micro.nr;
+                            if (q0 >= q_end) break;
+                            const int64_t j0 = q0 * micro.nr;
+                            micro.row_panel(a_packed.data() + i0 * depth,
+                                            b_packed.data() + j0 * depth, depth, q_end - q0,
+                                            n - i0, n - j0, gram + j0 * n + i0, n);
+                          }
                         }
                       });
   }
