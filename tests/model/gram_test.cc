@@ -78,11 +78,13 @@ class GramKernelTest : public ::testing::TestWithParam<GramKernel> {
 };
 
 TEST_P(GramKernelTest, GramMatchesDoubleProductOnOddSizes) {
-  // (D, N): D around the block depth 256 and off it, N = 1 and N off every
-  // tile size (8/16/32 rows, 4/6/12 columns).
+  // (D, N): D around the block depth 512 and off it, N = 1, N off every
+  // micro-tile size (8/16/32 rows, 4/6/12 columns) and over several of the
+  // 128 x 240 parallel tiles.
   const std::vector<std::pair<int64_t, int64_t>> sizes = {
-      {1, 1},   {7, 1},    {300, 1},  {1, 2},    {5, 3},    {255, 5},   {256, 13},
-      {257, 17}, {511, 31}, {769, 33}, {100, 37}, {1000, 61}, {2000, 100}};
+      {1, 1},    {7, 1},     {300, 1},   {1, 2},     {5, 3},      {255, 5},  {512, 13},
+      {513, 17}, {1023, 31}, {1537, 33}, {100, 37},  {1000, 61},  {2000, 100},
+      {300, 129}, {600, 241}, {700, 301}};
   unsigned seed = 1;
   for (const auto& [dim, n] : sizes) {
     SCOPED_TRACE("D = " + std::to_string(dim) + ", N = " + std::to_string(n));
@@ -104,12 +106,12 @@ TEST_P(GramKernelTest, GramMatchesDoubleProductOnOddSizes) {
 }
 
 TEST_P(GramKernelTest, ProductMatchesDoubleProductOnOddSizes) {
-  // (D, N, C): N around the block depth, C off the tile widths.
+  // (D, N, C): N around the block depth 512, C off the tile widths.
   struct Size {
     int64_t dim, num_samples, num_cols;
   };
   const std::vector<Size> sizes = {{1, 1, 1},     {17, 3, 5},    {300, 2, 20},
-                                   {257, 255, 7}, {513, 257, 13}, {1031, 600, 20}};
+                                   {257, 511, 7}, {513, 513, 13}, {1031, 1100, 20}};
   unsigned seed = 100;
   for (const Size& size : sizes) {
     SCOPED_TRACE("D = " + std::to_string(size.dim) + ", N = " + std::to_string(size.num_samples) +
@@ -152,7 +154,7 @@ TEST(GramKernel, AvxKernelsAgreeBitForBit) {
   if (!GramKernelSupported(GramKernel::kAvx2) || !GramKernelSupported(GramKernel::kAvx512)) {
     GTEST_SKIP() << "needs both AVX2 and AVX-512";
   }
-  const Samples s = MakeSamples(1300, 45, 9);
+  const Samples s = MakeSamples(1300, 250, 9);
   const int64_t n = s.num_samples;
   std::vector<double> avx2(n * n), avx512(n * n);
   CentredGram(s.x.data(), s.dim, n, s.mean.data(), avx2.data(), GramKernel::kAvx2);
