@@ -293,9 +293,13 @@ constexpr int kCoarseStep = 4;
 constexpr int kCoarseOffset = (kCoarseStep - 1) / 2;
 constexpr int kCell = 8;
 
-// Fills the min/max depth over cells of kCell x kCell pixels.
-void BuildDepthCells(CarveView* view) {
+// Fills the coarse image and the min/max depth over cells of kCell x kCell
+// pixels, in one pass over the depth image.
+void BuildViewTables(CarveView* view) {
   const int width = view->width, height = view->height;
+  view->coarse_width = std::max(0, (width - 1 - kCoarseOffset) / kCoarseStep + 1);
+  view->coarse_height = std::max(0, (height - 1 - kCoarseOffset) / kCoarseStep + 1);
+  view->coarse_depth.resize(size_t(view->coarse_width) * size_t(view->coarse_height));
   view->cell_width = (width + kCell - 1) / kCell;
   view->cell_height = (height + kCell - 1) / kCell;
   constexpr float kInfinity = std::numeric_limits<float>::infinity();
@@ -305,14 +309,20 @@ void BuildDepthCells(CarveView* view) {
   std::vector<float> column_min(static_cast<size_t>(width)), column_max(static_cast<size_t>(width));
   for (int cw = 0; cw < view->cell_height; ++cw) {
     const int v0 = cw * kCell, v1 = std::min(height, v0 + kCell);
-    std::copy(view->depth + int64_t(v0) * width, view->depth + int64_t(v0 + 1) * width,
-              column_min.begin());
-    std::copy(column_min.begin(), column_min.end(), column_max.begin());
-    for (int v = v0 + 1; v < v1; ++v) {
+    std::fill(column_min.begin(), column_min.end(), kInfinity);
+    std::fill(column_max.begin(), column_max.end(), -kInfinity);
+    for (int v = v0; v < v1; ++v) {
       const float* row = view->depth + int64_t(v) * width;
+      float* lo = column_min.data();
+      float* hi = column_max.data();
       for (int u = 0; u < width; ++u) {
-        column_min[size_t(u)] = std::min(column_min[size_t(u)], row[u]);
-        column_max[size_t(u)] = std::max(column_max[size_t(u)], row[u]);
+        lo[u] = std::min(lo[u], row[u]);
+        hi[u] = std::max(hi[u], row[u]);
+      }
+      if (v >= kCoarseOffset && (v - kCoarseOffset) % kCoarseStep == 0) {
+        float* coarse = &view->coarse_depth[size_t((v - kCoarseOffset) / kCoarseStep) *
+                                            size_t(view->coarse_width)];
+        for (int cu = 0; cu < view->coarse_width; ++cu) coarse[cu] = row[kCoarseOffset + cu * kCoarseStep];
       }
     }
     float* out_min = &view->cell_min[size_t(cw) * size_t(view->cell_width)];
@@ -379,16 +389,39 @@ BlockDecision DecideBlock(const CarveView& view, const Block& block, float margi
   // Partly in the image: which voxels enter the frustum is per voxel.
   if (!all_in_image && !block.seen) return BlockDecision::kUndecided;
   const float last_u = float(view.width - 1), last_w = float(view.height - 1);
-  const int cu0 = int(std::clamp(u - du - kSampleSlack, 0.0f, last_u)) / kCell;
-  const int cu1 = int(std::clamp(u + du + kSampleSlack, 0.0f, last_u)) / kCell;
-  const int cw0 = int(std::clamp(w - dw - kSampleSlack, 0.0f, last_w)) / kCell;
-  const int cw1 = int(std::clamp(w + dw + kSampleSlack, 0.0f, last_w)) / kCell;
   float lowest = std::numeric_limits<float>::infinity(), highest = 0.0f;
-  for (int cw = cw0; cw <= cw1; ++cw) {
-    const size_t row = size_t(cw) * size_t(view.cell_width);
-    for (int cu = cu0; cu <= cu1; ++cu) {
-      lowest = std::min(lowest, view.cell_min[row + size_t(cu)]);
-      highest = std::max(highest, view.cell_max[row + size_t(cu)]);
+  // Voxels far enough to use the coarse image sample it at exactly these
+  // indices (as in VoxelCarver::Project, from the clamped projection).
+  constexpr float kIndexEps = 1e-3f;
+  const float ua = std::clamp(u - du, 0.0f, last_u), ub = std::clamp(u + du, 0.0f, last_u);
+  const float wa = std::clamp(w - dw, 0.0f, last_w), wb = std::clamp(w + dw, 0.0f, last_w);
+  const float cua = (ua - float(kCoarseOffset)) * (1.0f / kCoarseStep) + 0.5f - kIndexEps;
+  const float cub = (ub - float(kCoarseOffset)) * (1.0f / kCoarseStep) + 0.5f + kIndexEps;
+  const float cwa = (wa - float(kCoarseOffset)) * (1.0f / kCoarseStep) + 0.5f - kIndexEps;
+  const float cwb = (wb - float(kCoarseOffset)) * (1.0f / kCoarseStep) + 0.5f + kIndexEps;
+  if (block.min_distance > kCoarseStep * view.lateral_per_depth * zmax &&
+      cub < float(view.coarse_width) && cwb < float(view.coarse_height)) {
+    const int cu0 = std::max(0, int(cua)), cu1 = int(cub);
+    const int cw0 = std::max(0, int(cwa)), cw1 = int(cwb);
+    for (int cw = cw0; cw <= cw1; ++cw) {
+      const float* row = &view.coarse_depth[size_t(cw) * size_t(view.coarse_width)];
+      for (int cu = cu0; cu <= cu1; ++cu) {
+        lowest = std::min(lowest, row[cu]);
+        highest = std::max(highest, row[cu]);
+      }
+    }
+  } else {
+    // Otherwise a pixel within kSampleSlack of the projection: the min/max cells.
+    const int cu0 = int(std::clamp(u - du - kSampleSlack, 0.0f, last_u)) / kCell;
+    const int cu1 = int(std::clamp(u + du + kSampleSlack, 0.0f, last_u)) / kCell;
+    const int cw0 = int(std::clamp(w - dw - kSampleSlack, 0.0f, last_w)) / kCell;
+    const int cw1 = int(std::clamp(w + dw + kSampleSlack, 0.0f, last_w)) / kCell;
+    for (int cw = cw0; cw <= cw1; ++cw) {
+      const size_t row = size_t(cw) * size_t(view.cell_width);
+      for (int cu = cu0; cu <= cu1; ++cu) {
+        lowest = std::min(lowest, view.cell_min[row + size_t(cu)]);
+        highest = std::max(highest, view.cell_max[row + size_t(cu)]);
+      }
     }
   }
   // Not carved (and all in the image, or seen before): every sampled depth
@@ -665,6 +698,8 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
 
   // Seen triangles, with planes. triangle_index maps mesh triangle -> seen index or -1.
   std::vector<Triangle> triangles;
+  triangles.reserve(size_t(std::count(scan.triangle_seen.begin(), scan.triangle_seen.end(), uint8_t(1))) +
+                    1);
   std::vector<int32_t> triangle_index(mesh.triangles.size(), -1);
   for (size_t t = 0; t < mesh.triangles.size(); ++t) {
     if (!scan.triangle_seen[t]) continue;
@@ -773,17 +808,7 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
         0.55 * std::sqrt(1.0 / (view.camera.fx * view.camera.fx) + 1.0 / (view.camera.fy * view.camera.fy)));
     carve.depth = view.depth.data();
     carve.triangle = view.triangle.data();
-    carve.coarse_width = std::max(0, (carve.width - 1 - kCoarseOffset) / kCoarseStep + 1);
-    carve.coarse_height = std::max(0, (carve.height - 1 - kCoarseOffset) / kCoarseStep + 1);
-    carve.coarse_depth.resize(size_t(carve.coarse_width) * size_t(carve.coarse_height));
-    for (int cw = 0; cw < carve.coarse_height; ++cw) {
-      const float* row = carve.depth + int64_t(kCoarseOffset + cw * kCoarseStep) * carve.width;
-      for (int cu = 0; cu < carve.coarse_width; ++cu) {
-        carve.coarse_depth[size_t(cw) * size_t(carve.coarse_width) + size_t(cu)] =
-            row[kCoarseOffset + cu * kCoarseStep];
-      }
-    }
-    BuildDepthCells(&carve);
+    BuildViewTables(&carve);
     views.push_back(std::move(carve));
   }
   // Voxels within this distance of the surface may be "near" (docs/sdf.md) for
