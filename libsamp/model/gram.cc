@@ -99,6 +99,11 @@ constexpr int kMaxPanelWidth = 64;
 constexpr int64_t kTileRows = 128;
 constexpr int64_t kTileCols = 240;
 
+// Packed panels per pass over the rows: at most this many bytes (in L3) and
+// this many blocks of kGramBlockDepth rows.
+constexpr int64_t kPackBudgetBytes = int64_t(16) << 20;
+constexpr int64_t kMaxBlocksPerPass = 16;
+
 int64_t CeilDiv(int64_t a, int64_t b) { return (a + b - 1) / b; }
 
 // Panel of `width` samples starting at sample i0, rows [d0, d0 + depth), for
@@ -147,19 +152,6 @@ void PackSamplePanel(const float* x, int64_t dim, int64_t num_samples, const flo
       for (int c = c0; c < valid; ++c) o[c] = columns[c][k] - m[k];
       for (int c = std::max(c0, valid); c < width; ++c) o[c] = 0.0f;
     }
-  }
-}
-
-// Asks for rows [d0, d0 + depth) of `width` samples from i0 to be brought
-// into the cache (for the next block, while the kernel works on this one).
-void PrefetchSamples(const float* x, int64_t dim, int64_t num_samples, int64_t d0,
-                     int64_t depth, int64_t i0, int width) {
-  const int64_t i_end = std::min<int64_t>(num_samples, i0 + width);
-  constexpr int64_t kLineFloats = 64 / sizeof(float);
-  for (int64_t i = i0; i < i_end; ++i) {
-    const float* column = x + i * dim + d0;
-    for (int64_t k = 0; k < depth; k += kLineFloats) __builtin_prefetch(column + k, 0, 2);
-    __builtin_prefetch(column + depth - 1, 0, 2);
   }
 }
 
@@ -249,62 +241,74 @@ void CentredGram(const float* x, int64_t dim, int64_t num_samples, const float* 
   const int64_t n = num_samples;
   std::fill(gram, gram + n * n, 0.0);
 
-  // Per block of kGramBlockDepth rows: pack the centred rows of every sample
-  // twice (A panels of mr samples, B panels of nr samples), then multiply
-  // the panels tile by tile of the upper triangle (below). Each entry of the
-  // Gram matrix is read and written once per block. While a block is
-  // multiplied, the next one is prefetched (the packing reads short runs of
-  // many columns, which the hardware prefetcher misses).
+  // Rows are taken in super-blocks of up to kMaxBlocksPerPass blocks of
+  // kGramBlockDepth rows (packed data within kPackBudgetBytes): pack the
+  // centred rows of every sample twice (A panels of mr samples, B panels of
+  // nr samples; long contiguous reads of each column), then multiply the
+  // panels tile by tile of the upper triangle, block by block. Two parallel
+  // phases per super-block, so few barriers (a barrier costs a whole time
+  // slice when another process shares the core). Each entry of the Gram
+  // matrix is read and written once per block.
   const int64_t num_a = CeilDiv(n, micro.mr);
   const int64_t num_b = CeilDiv(n, micro.nr);
-  AlignedFloats a_packed(num_a * micro.mr * kGramBlockDepth);
-  AlignedFloats b_packed(num_b * micro.nr * kGramBlockDepth);
+  const int64_t a_block = num_a * micro.mr * kGramBlockDepth;  // floats per block
+  const int64_t b_block = num_b * micro.nr * kGramBlockDepth;
+  const int64_t blocks_per_pass = std::clamp<int64_t>(
+      kPackBudgetBytes / (int64_t(sizeof(float)) * (a_block + b_block)), 1, kMaxBlocksPerPass);
+  const int64_t pass_rows = blocks_per_pass * kGramBlockDepth;
+  AlignedFloats a_packed(std::min(blocks_per_pass, CeilDiv(dim, kGramBlockDepth)) * a_block);
+  AlignedFloats b_packed(std::min(blocks_per_pass, CeilDiv(dim, kGramBlockDepth)) * b_block);
   // Tiles of kTileRows x kTileCols of the Gram matrix on or above the
-  // diagonal, the unit of parallel work: a tile's B panels (<= 480 KB) stay
-  // in L2 while its A panels pass over them.
+  // diagonal, the unit of parallel work: a tile's B panels of one block
+  // (<= 480 KB) stay in L2 while its A panels pass over them.
   std::vector<std::pair<int64_t, int64_t>> tiles;
   for (int64_t tj = 0; tj * kTileCols < n; ++tj)
     for (int64_t ti = 0; ti * kTileRows < std::min(n, (tj + 1) * kTileCols); ++ti)
       tiles.emplace_back(ti, tj);
-  for (int64_t d0 = 0; d0 < dim; d0 += kGramBlockDepth) {
-    const int64_t depth = std::min(kGramBlockDepth, dim - d0);
-    tbb::parallel_for(tbb::blocked_range<int64_t>(0, num_a + num_b, 8),
-                      [&](const tbb::blocked_range<int64_t>& range) {
-                        for (int64_t p = range.begin(); p != range.end(); ++p) {
-                          if (p < num_a) {
-                            PackSamplePanel(x, dim, n, mean, d0, depth, p * micro.mr, micro.mr,
-                                            a_packed.data() + p * micro.mr * depth);
-                          } else {
-                            const int64_t q = p - num_a;
-                            PackSamplePanel(x, dim, n, mean, d0, depth, q * micro.nr, micro.nr,
-                                            b_packed.data() + q * micro.nr * depth);
-                          }
-                        }
-                      });
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1),
-                      [&](const tbb::blocked_range<size_t>& range) {
-                        for (size_t t = range.begin(); t != range.end(); ++t) {
-                          const int64_t i_begin = tiles[t].first * kTileRows;
-                          const int64_t i_end = std::min(n, i_begin + kTileRows);
-                          const int64_t j_begin = tiles[t].second * kTileCols;
-                          const int64_t j_end = std::min(n, j_begin + kTileCols);
-                          if (j_end == n && d0 + depth < dim) {
-                            PrefetchSamples(x, dim, n, d0 + depth,
-                                            std::min(kGramBlockDepth, dim - d0 - depth),
-                                            i_begin, int(i_end - i_begin));
-                          }
-                          const int64_t q_end = CeilDiv(j_end, micro.nr);
-                          for (int64_t i0 = i_begin; i0 < i_end; i0 += micro.mr) {
-                            // First B panel reaching i <= j.
-                            const int64_t q0 = std::max(j_begin, i0) / micro.nr;
-                            if (q0 >= q_end) break;
-                            const int64_t j0 = q0 * micro.nr;
-                            micro.row_panel(a_packed.data() + i0 * depth,
-                                            b_packed.data() + j0 * depth, depth, q_end - q0,
-                                            n - i0, n - j0, gram + j0 * n + i0, n);
-                          }
-                        }
-                      });
+  for (int64_t pass0 = 0; pass0 < dim; pass0 += pass_rows) {
+    const int64_t num_blocks = CeilDiv(std::min(pass_rows, dim - pass0), kGramBlockDepth);
+    tbb::parallel_for(
+        tbb::blocked_range<int64_t>(0, num_a + num_b, 4),
+        [&](const tbb::blocked_range<int64_t>& range) {
+          for (int64_t p = range.begin(); p != range.end(); ++p) {
+            for (int64_t block = 0; block < num_blocks; ++block) {
+              const int64_t d0 = pass0 + block * kGramBlockDepth;
+              const int64_t depth = std::min(kGramBlockDepth, dim - d0);
+              if (p < num_a) {
+                PackSamplePanel(x, dim, n, mean, d0, depth, p * micro.mr, micro.mr,
+                                a_packed.data() + block * a_block + p * micro.mr * depth);
+              } else {
+                const int64_t q = p - num_a;
+                PackSamplePanel(x, dim, n, mean, d0, depth, q * micro.nr, micro.nr,
+                                b_packed.data() + block * b_block + q * micro.nr * depth);
+              }
+            }
+          }
+        });
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, tiles.size(), 1),
+        [&](const tbb::blocked_range<size_t>& range) {
+          for (size_t t = range.begin(); t != range.end(); ++t) {
+            const int64_t i_begin = tiles[t].first * kTileRows;
+            const int64_t i_end = std::min(n, i_begin + kTileRows);
+            const int64_t j_begin = tiles[t].second * kTileCols;
+            const int64_t j_end = std::min(n, j_begin + kTileCols);
+            const int64_t q_end = CeilDiv(j_end, micro.nr);
+            for (int64_t block = 0; block < num_blocks; ++block) {
+              const int64_t depth =
+                  std::min(kGramBlockDepth, dim - pass0 - block * kGramBlockDepth);
+              const float* a = a_packed.data() + block * a_block;
+              const float* b = b_packed.data() + block * b_block;
+              for (int64_t i0 = i_begin; i0 < i_end; i0 += micro.mr) {
+                const int64_t q0 = std::max(j_begin, i0) / micro.nr;  // first with i <= j
+                if (q0 >= q_end) break;
+                const int64_t j0 = q0 * micro.nr;
+                micro.row_panel(a + i0 * depth, b + j0 * depth, depth, q_end - q0, n - i0,
+                                n - j0, gram + j0 * n + i0, n);
+              }
+            }
+          }
+        });
   }
   // Tiles crossing the diagonal also filled some of the lower triangle; the
   // upper one (i <= j) is complete: mirror it.

@@ -79,12 +79,12 @@ class GramKernelTest : public ::testing::TestWithParam<GramKernel> {
 
 TEST_P(GramKernelTest, GramMatchesDoubleProductOnOddSizes) {
   // (D, N): D around the block depth 512 and off it, N = 1, N off every
-  // micro-tile size (8/16/32 rows, 4/6/12 columns) and over several of the
-  // 128 x 240 parallel tiles.
+  // micro-tile size (8/16/32 rows, 4/6/12 columns), over several of the
+  // 128 x 240 parallel tiles, and D over several passes of 16 blocks.
   const std::vector<std::pair<int64_t, int64_t>> sizes = {
       {1, 1},    {7, 1},     {300, 1},   {1, 2},     {5, 3},      {255, 5},  {512, 13},
       {513, 17}, {1023, 31}, {1537, 33}, {100, 37},  {1000, 61},  {2000, 100},
-      {300, 129}, {600, 241}, {700, 301}};
+      {300, 129}, {600, 241}, {700, 301}, {8193, 7}, {17000, 50}};
   unsigned seed = 1;
   for (const auto& [dim, n] : sizes) {
     SCOPED_TRACE("D = " + std::to_string(dim) + ", N = " + std::to_string(n));
