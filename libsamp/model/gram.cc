@@ -169,7 +169,9 @@ void PackRowPanels(const float* x, int64_t dim, const float* mean, int64_t r_beg
   for (int64_t k = 0; k < depth; ++k) {
     if (k + kPrefetchAhead < depth) {
       const float* ahead = x + (n0 + k + kPrefetchAhead) * dim + r_begin;
-      for (int64_t i = 0; i < r_end - r_begin; i += kLineFloats) __builtin_prefetch(ahead + i, 0, 3);
+      for (int64_t i = 0; i < r_end - r_begin; i += kLineFloats) {
+        __builtin_prefetch(ahead + i, 0, 3);
+      }
     }
     const float* column = x + (n0 + k) * dim + r_begin;
     for (int64_t a = 0; a < num_panels; ++a) {
