@@ -6,7 +6,10 @@
 #include <embree3/rtcore.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
+#include <vector>
 
 #include "libsamp/scan/embree_scene.h"
 #include "libsamp/scan/renderer.h"
@@ -91,75 +94,189 @@ void BM_IntersectCamera(benchmark::State& state) {
 }
 BENCHMARK(BM_IntersectCamera)->Unit(benchmark::kMillisecond);
 
-// Reference: the same views with Embree's C API directly (robust scene, high
-// build quality, rtcIntersect16 on 4x4 tiles, nothing stored), to show the
-// wrapper's overhead in the same run.
+// Reference: the same views with Embree's C API directly, nothing stored, to
+// show the wrapper's overhead in the same run and to compare Embree's options.
+// The ray directions of each view are computed before its timing starts, so
+// the time is Embree's (plus copying 3 x N floats into each packet).
+// Args: packet width (16, 8, 4, or 1 = rtcIntersect1M stream of one tile
+// row-major 16 x 16), build quality (0 low, 1 medium, 2 high), robust (0/1),
+// coherent context flag (0/1).
+template <int N>
+struct RawPacket;
+template <>
+struct RawPacket<4> {
+  using Type = RTCRayHit4;
+  static constexpr int kTw = 2, kTh = 2;
+  static void Intersect(const int* valid, RTCScene s, RTCIntersectContext* c, Type* r) { rtcIntersect4(valid, s, c, r); }
+};
+template <>
+struct RawPacket<8> {
+  using Type = RTCRayHit8;
+  static constexpr int kTw = 4, kTh = 2;
+  static void Intersect(const int* valid, RTCScene s, RTCIntersectContext* c, Type* r) { rtcIntersect8(valid, s, c, r); }
+};
+template <>
+struct RawPacket<16> {
+  using Type = RTCRayHit16;
+  static constexpr int kTw = 4, kTh = 4;
+  static void Intersect(const int* valid, RTCScene s, RTCIntersectContext* c, Type* r) { rtcIntersect16(valid, s, c, r); }
+};
+
+struct RawScene {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  RawScene(const Mesh& mesh, RTCBuildQuality quality, bool robust) {
+    device = rtcNewDevice(nullptr);
+    scene = rtcNewScene(device);
+    if (robust) rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(scene, quality);
+    RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetGeometryBuildQuality(geometry, quality);
+    float* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, mesh.vertices.size()));
+    unsigned* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+        geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, mesh.triangles.size()));
+    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+      for (int c = 0; c < 3; ++c) vertices[3 * i + c] = mesh.vertices[i][c];
+    }
+    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+      for (int c = 0; c < 3; ++c) indices[3 * i + c] = unsigned(mesh.triangles[i][c]);
+    }
+    rtcCommitGeometry(geometry);
+    rtcAttachGeometry(scene, geometry);
+    rtcReleaseGeometry(geometry);
+    rtcCommitScene(scene);
+  }
+  ~RawScene() {
+    rtcReleaseScene(scene);
+    rtcReleaseDevice(device);
+  }
+};
+
+// Unit ray directions of one 400 x 400 view, grouped by tiles of tw x th
+// pixels (row-major within a tile), the tiles row-major.
+std::vector<Eigen::Vector3f> TileDirections(const Eigen::Isometry3f& view, int tw, int th) {
+  const PinholeCamera camera = ViewCamera();
+  std::vector<Eigen::Vector3f> directions;
+  directions.reserve(400 * 400);
+  for (int v0 = 0; v0 < 400; v0 += th) {
+    for (int u0 = 0; u0 < 400; u0 += tw) {
+      for (int j = 0; j < tw * th; ++j) {
+        directions.push_back(view.linear() * Eigen::Vector3f((u0 + j % tw - 199.5f) / float(camera.fx),
+                                                             (v0 + j / tw - 199.5f) / float(camera.fy), 1.f)
+                                                 .normalized());
+      }
+    }
+  }
+  return directions;
+}
+
+template <int N>
+int64_t TraceRawView(RTCScene scene, RTCIntersectContext* context, const Eigen::Vector3f& origin,
+                     const std::vector<Eigen::Vector3f>& directions) {
+  using P = RawPacket<N>;
+  alignas(64) typename P::Type packet;
+  alignas(64) int valid[N];
+  for (int j = 0; j < N; ++j) {
+    valid[j] = -1;
+    packet.ray.org_x[j] = origin.x();
+    packet.ray.org_y[j] = origin.y();
+    packet.ray.org_z[j] = origin.z();
+    packet.ray.tnear[j] = 0.f;
+    packet.ray.mask[j] = ~0u;
+    packet.ray.flags[j] = 0;
+    packet.ray.time[j] = 0.f;
+    packet.ray.id[j] = unsigned(j);
+    packet.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+  }
+  int64_t hits = 0;
+  for (size_t begin = 0; begin < directions.size(); begin += N) {
+    for (int j = 0; j < N; ++j) {
+      const Eigen::Vector3f& d = directions[begin + size_t(j)];
+      packet.ray.dir_x[j] = d.x();
+      packet.ray.dir_y[j] = d.y();
+      packet.ray.dir_z[j] = d.z();
+      packet.ray.tfar[j] = std::numeric_limits<float>::infinity();
+      packet.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+    }
+    P::Intersect(valid, scene, context, &packet);
+    for (int j = 0; j < N; ++j) hits += packet.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID;
+  }
+  return hits;
+}
+
+// rtcIntersect1M over a stream of 256 rays (a 16 x 16 tile).
+int64_t TraceRawStream(RTCScene scene, RTCIntersectContext* context, const Eigen::Vector3f& origin,
+                       const std::vector<Eigen::Vector3f>& directions) {
+  constexpr int kStream = 256;
+  std::vector<RTCRayHit> rays(kStream);
+  int64_t hits = 0;
+  for (size_t begin = 0; begin < directions.size(); begin += kStream) {
+    const int n = int(std::min<size_t>(kStream, directions.size() - begin));
+    for (int j = 0; j < n; ++j) {
+      RTCRayHit& r = rays[size_t(j)];
+      const Eigen::Vector3f& d = directions[begin + size_t(j)];
+      r.ray.org_x = origin.x();
+      r.ray.org_y = origin.y();
+      r.ray.org_z = origin.z();
+      r.ray.dir_x = d.x();
+      r.ray.dir_y = d.y();
+      r.ray.dir_z = d.z();
+      r.ray.tnear = 0.f;
+      r.ray.tfar = std::numeric_limits<float>::infinity();
+      r.ray.mask = ~0u;
+      r.ray.flags = 0;
+      r.ray.time = 0.f;
+      r.ray.id = unsigned(j);
+      r.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+      r.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    }
+    rtcIntersect1M(scene, context, rays.data(), unsigned(n), sizeof(RTCRayHit));
+    for (int j = 0; j < n; ++j) hits += rays[size_t(j)].hit.geomID != RTC_INVALID_GEOMETRY_ID;
+  }
+  return hits;
+}
+
 void BM_EmbreeRawPackets(benchmark::State& state) {
   tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
-  const Mesh& mesh = BumpyMesh();
-  RTCDevice device = rtcNewDevice(nullptr);
-  RTCScene scene = rtcNewScene(device);
-  rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
-  RTCGeometry geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  float* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 12, mesh.vertices.size()));
-  unsigned* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
-      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 12, mesh.triangles.size()));
-  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-    for (int c = 0; c < 3; ++c) vertices[3 * i + c] = mesh.vertices[i][c];
-  }
-  for (size_t i = 0; i < mesh.triangles.size(); ++i) {
-    for (int c = 0; c < 3; ++c) indices[3 * i + c] = unsigned(mesh.triangles[i][c]);
-  }
-  rtcCommitGeometry(geometry);
-  rtcAttachGeometry(scene, geometry);
-  rtcReleaseGeometry(geometry);
-  rtcCommitScene(scene);
-  const PinholeCamera camera = ViewCamera();
+  const int width = int(state.range(0));
+  const RawScene raw(BumpyMesh(), RTCBuildQuality(state.range(1)), state.range(2) != 0);
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  context.flags = state.range(3) ? RTC_INTERSECT_CONTEXT_FLAG_COHERENT : RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT;
+  const int tw = width == 16 ? 4 : width == 8 ? 4 : width == 4 ? 2 : 16;
+  const int th = width == 16 ? 4 : width == 8 ? 2 : width == 4 ? 2 : 16;
   int64_t rays = 0, hits = 0;
   size_t k = 0;
   for (auto _ : state) {
+    state.PauseTiming();
     const Eigen::Isometry3f view = View(k++).cast<float>();
-    for (int v0 = 0; v0 < 400; v0 += 4) {
-      for (int u0 = 0; u0 < 400; u0 += 4) {
-        alignas(64) RTCRayHit16 packet;
-        alignas(64) int valid[16];
-        for (int j = 0; j < 16; ++j) {
-          const Eigen::Vector3f d =
-              view.linear() * Eigen::Vector3f((u0 + j % 4 - 199.5f) / float(camera.fx),
-                                              (v0 + j / 4 - 199.5f) / float(camera.fy), 1.f)
-                                  .normalized();
-          valid[j] = -1;
-          packet.ray.org_x[j] = view.translation().x();
-          packet.ray.org_y[j] = view.translation().y();
-          packet.ray.org_z[j] = view.translation().z();
-          packet.ray.dir_x[j] = d.x();
-          packet.ray.dir_y[j] = d.y();
-          packet.ray.dir_z[j] = d.z();
-          packet.ray.tnear[j] = 0.f;
-          packet.ray.tfar[j] = std::numeric_limits<float>::infinity();
-          packet.ray.mask[j] = ~0u;
-          packet.ray.flags[j] = 0;
-          packet.ray.time[j] = 0.f;
-          packet.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect16(valid, scene, &context, &packet);
-        for (int j = 0; j < 16; ++j) hits += packet.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID;
-      }
+    const std::vector<Eigen::Vector3f> directions = TileDirections(view, tw, th);
+    state.ResumeTiming();
+    switch (width) {
+      case 16: hits += TraceRawView<16>(raw.scene, &context, view.translation(), directions); break;
+      case 8: hits += TraceRawView<8>(raw.scene, &context, view.translation(), directions); break;
+      case 4: hits += TraceRawView<4>(raw.scene, &context, view.translation(), directions); break;
+      default: hits += TraceRawStream(raw.scene, &context, view.translation(), directions); break;
     }
     rays += 400 * 400;
   }
-  benchmark::DoNotOptimize(hits);
-  rtcReleaseScene(scene);
-  rtcReleaseDevice(device);
   state.counters["hit_fraction"] = double(hits) / double(std::max<int64_t>(rays, 1));
   state.counters["rays_per_s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
 }
-BENCHMARK(BM_EmbreeRawPackets)->Unit(benchmark::kMillisecond);
+// The configuration EmbreeScene uses (packets of 16, high quality, robust, coherent) ...
+BENCHMARK(BM_EmbreeRawPackets)->Args({16, 2, 1, 1})->Unit(benchmark::kMillisecond);
+// ... and the alternatives: packet width / stream, build quality, robust, coherent flag.
+BENCHMARK(BM_EmbreeRawPackets)
+    ->ArgNames({"packet", "quality", "robust", "coherent"})
+    ->Args({8, 2, 1, 1})
+    ->Args({4, 2, 1, 1})
+    ->Args({1, 2, 1, 1})
+    ->Args({16, 1, 1, 1})
+    ->Args({16, 0, 1, 1})
+    ->Args({16, 2, 0, 1})
+    ->Args({16, 2, 1, 0})
+    ->Unit(benchmark::kMillisecond);
 
 void BM_SceneBuild(benchmark::State& state) {
   tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
@@ -170,6 +287,16 @@ void BM_SceneBuild(benchmark::State& state) {
   state.counters["triangles"] = double(BumpyMesh().triangles.size());
 }
 BENCHMARK(BM_SceneBuild)->Unit(benchmark::kMillisecond);
+
+// Embree's BVH build alone at each build quality (0 low, 1 medium, 2 high), robust.
+void BM_EmbreeRawBuild(benchmark::State& state) {
+  tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+  for (auto _ : state) {
+    const RawScene raw(BumpyMesh(), RTCBuildQuality(state.range(0)), true);
+    benchmark::DoNotOptimize(raw.scene);
+  }
+}
+BENCHMARK(BM_EmbreeRawBuild)->ArgName("quality")->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 
 // A KITTI-sized frame (1242 x 375) of the mesh 10 m ahead, all cores. Arg:
 // n of the n x n sphere (224: 100k triangles; 50: 5k, the size of a CAD car).
