@@ -3,7 +3,8 @@
 // thread, next to OpenVDB's meshToLevelSet / meshToSignedDistanceField on the
 // same mesh and grid; then a sign check on open / non-watertight meshes.
 //
-//   sdf_bench [--benchmark_filter=...]        (runs single-threaded)
+//   sdf_bench [--benchmark_filter=...] [--sdf_timing=0] [--sdf_report=0]
+//             [--sdf_cad_dir=CACHE_DIR/cars]     (runs single-threaded)
 #include <benchmark/benchmark.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/MeshToVolume.h>
@@ -21,6 +22,10 @@
 
 #include "libsamp/core/grid_spec.h"
 #include "libsamp/core/mesh.h"
+#include "libsamp/core/error.h"
+#include "libsamp/scan/canonical.h"
+#include "libsamp/scan/embree_scene.h"
+#include "libsamp/scan/mesh_io.h"
 #include "libsamp/scan/scanner.h"
 #include "libsamp/sdf/sdf.h"
 #include "libsamp/sdf/vdb_io.h"
@@ -226,6 +231,100 @@ double OpenBoxDistance(const Eigen::Vector3d& p) {
   return best;
 }
 
+// A closed box (kBoxLo..kBoxHi) with a square hole of side `hole` metres in the
+// middle of its z = hi face, larger than meshToLevelSet's band. Truth: the
+// solid box.
+Mesh MakeBoxWithHole(double hole) {
+  Mesh mesh = MakeBoxMesh(kBoxLo, kBoxHi);
+  // Drop the z = hi face (two triangles whose vertices all have z = hi) ...
+  std::vector<Eigen::Vector3i> kept;
+  for (const auto& t : mesh.triangles) {
+    bool on_face = true;
+    for (int a = 0; a < 3; ++a) on_face &= mesh.vertices[size_t(t[a])].z() == float(kBoxHi.z());
+    if (!on_face) kept.push_back(t);
+  }
+  mesh.triangles = kept;
+  // ... and put it back as four rectangles around the hole.
+  const double cx = 0.5 * (kBoxLo.x() + kBoxHi.x()), cy = 0.5 * (kBoxLo.y() + kBoxHi.y());
+  const double x[4] = {kBoxLo.x(), cx - 0.5 * hole, cx + 0.5 * hole, kBoxHi.x()};
+  const double y[4] = {kBoxLo.y(), cy - 0.5 * hole, cy + 0.5 * hole, kBoxHi.y()};
+  for (int a = 0; a < 3; ++a) {
+    for (int b = 0; b < 3; ++b) {
+      if (a == 1 && b == 1) continue;  // the hole
+      const int base = int(mesh.vertices.size());
+      const float z = float(kBoxHi.z());
+      mesh.vertices.push_back(Eigen::Vector3f(float(x[a]), float(y[b]), z));
+      mesh.vertices.push_back(Eigen::Vector3f(float(x[a + 1]), float(y[b]), z));
+      mesh.vertices.push_back(Eigen::Vector3f(float(x[a + 1]), float(y[b + 1]), z));
+      mesh.vertices.push_back(Eigen::Vector3f(float(x[a]), float(y[b + 1]), z));
+      mesh.triangles.emplace_back(base, base + 1, base + 2);
+      mesh.triangles.emplace_back(base, base + 2, base + 3);
+    }
+  }
+  return mesh;
+}
+
+double BoxSdf(const Eigen::Vector3d& p) {
+  const Eigen::Vector3d center = 0.5 * (kBoxLo + kBoxHi), half = 0.5 * (kBoxHi - kBoxLo);
+  const Eigen::Vector3d q = (p - center).cwiseAbs() - half;
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+// The ellipsoid body with the triangles whose centroid satisfies `drop` removed.
+template <typename Drop>
+Mesh EllipsoidWithout(const Drop& drop) {
+  const Mesh ellipsoid = MakeEllipsoid();
+  Mesh mesh;
+  mesh.vertices = ellipsoid.vertices;
+  for (const auto& t : ellipsoid.triangles) {
+    const Eigen::Vector3f c = (ellipsoid.vertices[size_t(t.x())] + ellipsoid.vertices[size_t(t.y())] +
+                               ellipsoid.vertices[size_t(t.z())]) / 3.0f;
+    if (!drop(c)) mesh.triangles.push_back(t);
+  }
+  return mesh;
+}
+
+// Interior geometry of a car: two closed seat boxes and a floor sheet.
+void AddInterior(Mesh* mesh) {
+  mesh->Append(MakeBoxMesh(Eigen::Vector3d(-0.6, -1.0, -0.6), Eigen::Vector3d(0.0, -0.35, -0.1)));
+  mesh->Append(MakeBoxMesh(Eigen::Vector3d(-0.6, -1.0, 0.1), Eigen::Vector3d(0.0, -0.35, 0.6)));
+  Mesh floor;
+  floor.vertices = {Eigen::Vector3f(-1.6f, -0.3f, -0.7f), Eigen::Vector3f(1.6f, -0.3f, -0.7f),
+                    Eigen::Vector3f(1.6f, -0.3f, 0.7f), Eigen::Vector3f(-1.6f, -0.3f, 0.7f)};
+  floor.triangles = {Eigen::Vector3i(0, 1, 2), Eigen::Vector3i(0, 2, 3)};
+  mesh->Append(floor);
+}
+
+// A car-like hull: the ellipsoid with four open wheel arches (holes of
+// radius 0.38 m low on its sides) and the bottom open below y = -0.12 (the
+// ellipsoid's lowest 0.12 m), plus seats and a floor inside. Truth: the solid
+// ellipsoid.
+Mesh MakeOpenHull() {
+  Mesh mesh = EllipsoidWithout([](const Eigen::Vector3f& c) {
+    if (c.y() > -0.12f) return true;  // open bottom
+    for (const float x : {-1.3f, 1.3f}) {
+      for (const float z : {-0.8f, 0.8f}) {
+        if ((c - Eigen::Vector3f(x, -0.25f, z)).norm() < 0.38f) return true;  // wheel arch
+      }
+    }
+    return false;
+  });
+  AddInterior(&mesh);
+  return mesh;
+}
+
+// Panels with gaps: the ellipsoid cut by three 0.1 m slits (all around at
+// x = -0.7 and x = 0.9, and along the left side at y = -0.75), plus the
+// interior. Truth: the solid ellipsoid.
+Mesh MakeSlitHull() {
+  Mesh mesh = EllipsoidWithout([](const Eigen::Vector3f& c) {
+    return std::abs(c.x() + 0.7f) < 0.05f || std::abs(c.x() - 0.9f) < 0.05f ||
+           (c.z() > 0.0f && std::abs(c.y() + 0.75f) < 0.05f);
+  });
+  AddInterior(&mesh);
+  return mesh;
+}
+
 // Thread CPU time: the figures do not depend on other load on the machine.
 double ThreadSeconds() {
   timespec t;
@@ -245,7 +344,7 @@ double MedianSeconds(int runs, const Fn& fn) {
   return seconds[seconds.size() / 2];
 }
 
-void RunSignCheck() {
+void RunTimingSummary() {
   const Scene& closed = ClosedScene();
   const auto transform = VdbTransform(closed.grid);
 
@@ -270,7 +369,11 @@ void RunSignCheck() {
               1e3 * level_set, level_set / ours);
   std::printf("  OpenVDB meshToSignedDistanceField (grid)   %8.1f ms  (ratio %.2fx)\n",
               1e3 * whole, whole / ours);
+}
 
+void RunSignCheck() {
+  const Scene& closed = ClosedScene();
+  const auto transform = VdbTransform(closed.grid);
   struct Case {
     const char* name;
     Mesh mesh;
@@ -280,6 +383,10 @@ void RunSignCheck() {
   cases.push_back({"closed ellipsoid", closed.mesh, EllipsoidSdf});
   cases.push_back({"CAD-like soup (parts, flips, interior, sheet)", MakeCadLikeMesh(), EllipsoidSdf});
   cases.push_back({"open box (visibility truth: all outside)", MakeOpenBox(), OpenBoxDistance});
+  cases.push_back({"box, 0.8 m hole in a side (truth: solid box)", MakeBoxWithHole(0.8), BoxSdf});
+  cases.push_back({"box, 0.3 m hole in a side (truth: solid box)", MakeBoxWithHole(0.3), BoxSdf});
+  cases.push_back({"hull, open arches + bottom, seats (solid)", MakeOpenHull(), EllipsoidSdf});
+  cases.push_back({"hull, three 0.1 m slits, seats (solid)", MakeSlitHull(), EllipsoidSdf});
   std::printf("\nWrong-sign voxels (|truth| >= 1 voxel), same grid:\n");
   std::printf("  %-48s %12s %14s %10s\n", "mesh", "ComputeSdf", "meshToLevelSet", "voxels");
   for (size_t index = 0; index < cases.size(); ++index) {
@@ -301,6 +408,129 @@ void RunSignCheck() {
   }
 }
 
+
+// ---------------------------------------------------------------------------
+// Real CAD cars (optional: --sdf_cad_dir=DIR, the folder of tools/get_cad_cars.sh
+// with cad_manifest.json). No analytic truth: the reference sign of a voxel is
+// the majority over kParityDirections ray directions of the parity of the
+// number of mesh surfaces (all triangles) each ray from the voxel centre
+// crosses. Voxels within one voxel of the surface (by either method's
+// distance) and voxels where the vote is close (within 25 %-75 %) are not
+// counted.
+
+constexpr int kParityDirections = 32;
+
+// Fraction of directions with an odd number of crossings, per point.
+std::vector<float> ParityVotes(const Mesh& mesh, const std::vector<Eigen::Vector3f>& points) {
+  const EmbreeScene scene(mesh);
+  const std::vector<Eigen::Vector3d> sphere = FibonacciSphere(kParityDirections);
+  std::vector<Eigen::Vector3f> origins, directions;
+  std::vector<int32_t> owner;
+  for (size_t p = 0; p < points.size(); ++p) {
+    for (const Eigen::Vector3d& d : sphere) {
+      // A slightly irrational tilt keeps rays off edges and axis-aligned faces.
+      origins.push_back(points[p]);
+      directions.push_back((d + Eigen::Vector3d(0.0123, 0.0071, 0.0037)).normalized().cast<float>());
+      owner.push_back(int32_t(p));
+    }
+  }
+  std::vector<int32_t> crossings(points.size() * size_t(kParityDirections), 0);
+  std::vector<int32_t> ray_index(origins.size());
+  for (size_t r = 0; r < ray_index.size(); ++r) ray_index[r] = int32_t(r);
+  std::vector<RayHit> hits;
+  for (int round = 0; round < 64 && !origins.empty(); ++round) {
+    scene.Intersect(origins, directions, &hits);
+    size_t kept = 0;
+    for (size_t r = 0; r < origins.size(); ++r) {
+      if (!hits[r].Hit()) continue;
+      ++crossings[size_t(ray_index[r])];
+      origins[kept] = origins[r] + (hits[r].t + 1e-4f) * directions[r];
+      directions[kept] = directions[r];
+      ray_index[kept] = ray_index[r];
+      ++kept;
+    }
+    origins.resize(kept);
+    directions.resize(kept);
+    ray_index.resize(kept);
+  }
+  std::vector<float> votes(points.size(), 0.0f);
+  for (size_t r = 0; r < crossings.size(); ++r) {
+    if (crossings[r] % 2) votes[r / kParityDirections] += 1.0f / kParityDirections;
+  }
+  return votes;
+}
+
+void RunCadCheck(const std::string& folder) {
+  const Manifest manifest = LoadManifest(folder + "/cad_manifest.json");
+  std::printf("\nReal CAD cars (%s), grid 0.05 m around each car (+0.3 m), 100-view scans:\n",
+              folder.c_str());
+  std::printf("reference: majority of %d-direction ray parity (all triangles); counted: |vote - 0.5| >= 0.25\n"
+              "and >= 1 voxel from the surface; wrong = sign differs from the reference\n",
+              kParityDirections);
+  std::printf("  %-16s %5s %6s %8s %10s %10s %9s %9s %9s %9s %9s %7s\n", "car", "skip", "tris", "counted",
+              "wrong:ours", "wrong:vdb", "ours!=vdb", "in:ref", "in:ours", "in:vdb", "ambiguous",
+              "SDF ms");
+  for (const ManifestEntry& entry : manifest.entries) {
+    try {
+      const Mesh mesh = Canonicalize(LoadMesh(folder + "/" + entry.file), entry.canonicalize).mesh;
+      const AlignedBox box = mesh.Bounds();
+      const GridSpec grid = GridSpec::FromBox(box.min - Eigen::Vector3d::Constant(0.3),
+                                              box.max + Eigen::Vector3d::Constant(0.3), 0.05);
+      const ScanResult scan = ScanMesh(mesh, ScanOptions());
+      const double start = ThreadSeconds();
+      const Sdf sdf = ComputeSdf(mesh, scan, grid, SdfOptions());
+      const double sdf_seconds = ThreadSeconds() - start;
+      const VdbMesh vdb_mesh = ToVdb(mesh);
+      const auto level_set = openvdb::tools::meshToLevelSet<openvdb::FloatGrid>(
+          *VdbTransform(grid), vdb_mesh.points, vdb_mesh.triangles, 3.0f);
+      const auto accessor = level_set->getConstAccessor();
+      // Reference votes for the voxels not near the surface.
+      const double h = grid.voxel_size;
+      std::vector<Eigen::Vector3f> points;
+      std::vector<int64_t> voxel;
+      std::vector<float> vdb_values;
+      for (int k = 0; k < grid.dims.z(); ++k) {
+        for (int j = 0; j < grid.dims.y(); ++j) {
+          for (int i = 0; i < grid.dims.x(); ++i) {
+            const float ours = sdf.values[size_t(grid.Index(i, j, k))];
+            const float theirs = accessor.getValue(openvdb::Coord(i, j, k));
+            if (std::abs(ours) < h || std::abs(theirs) < h) continue;
+            points.push_back(grid.Position(i, j, k).cast<float>());
+            voxel.push_back(grid.Index(i, j, k));
+            vdb_values.push_back(theirs);
+          }
+        }
+      }
+      const std::vector<float> votes = ParityVotes(mesh, points);
+      int64_t counted = 0, ambiguous = 0, inside = 0, wrong_ours = 0, wrong_vdb = 0;
+      int64_t ours_inside = 0, vdb_inside = 0, disagree = 0;  // among the counted voxels
+      for (size_t p = 0; p < points.size(); ++p) {
+        if (std::abs(votes[p] - 0.5f) < 0.25f) {
+          ++ambiguous;
+          continue;
+        }
+        ++counted;
+        const bool reference_inside = votes[p] > 0.5f;
+        inside += reference_inside;
+        ours_inside += sdf.values[size_t(voxel[p])] < 0;
+        vdb_inside += vdb_values[p] < 0;
+        disagree += (sdf.values[size_t(voxel[p])] < 0) != (vdb_values[p] < 0);
+        wrong_ours += (sdf.values[size_t(voxel[p])] < 0) != reference_inside;
+        wrong_vdb += (vdb_values[p] < 0) != reference_inside;
+      }
+      std::printf("  %-16s %5s %6zu %8lld %10lld %10lld %9lld %9lld %9lld %9lld %9lld %7.1f\n",
+                  entry.name.c_str(), entry.skip ? "yes" : "no", mesh.triangles.size(),
+                  static_cast<long long>(counted), static_cast<long long>(wrong_ours),
+                  static_cast<long long>(wrong_vdb), static_cast<long long>(disagree),
+                  static_cast<long long>(inside),
+                  static_cast<long long>(ours_inside), static_cast<long long>(vdb_inside),
+                  static_cast<long long>(ambiguous), 1e3 * sdf_seconds);
+    } catch (const Error& e) {
+      std::printf("  %-16s failed: %s\n", entry.name.c_str(), e.what());
+    }
+  }
+}
+
 }  // namespace
 }  // namespace samp
 
@@ -308,20 +538,32 @@ int main(int argc, char** argv) {
   // One thread for everything, OpenVDB's TBB loops included.
   tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
   samp::InitializeOpenVdb();
-  // --sdf_report=0 skips the comparison table and sign check (e.g. for profiling).
-  bool report = true;
+  // Own flags (removed before Google Benchmark parses the rest):
+  //   --sdf_report=0      skip everything after the benchmarks (e.g. for profiling)
+  //   --sdf_timing=0      skip the timing summary (OpenVDB's whole-grid SDF takes ~1 min)
+  //   --sdf_cad_dir=DIR   also compare signs on the real CAD cars in DIR
+  bool report = true, timing = true;
+  std::string cad_dir;
+  int kept = 1;
   for (int a = 1; a < argc; ++a) {
-    if (std::string(argv[a]) == "--sdf_report=0") {
+    const std::string arg = argv[a];
+    if (arg == "--sdf_report=0") {
       report = false;
-      for (int b = a; b + 1 < argc; ++b) argv[b] = argv[b + 1];
-      --argc;
-      break;
+    } else if (arg == "--sdf_timing=0") {
+      timing = false;
+    } else if (arg.rfind("--sdf_cad_dir=", 0) == 0) {
+      cad_dir = arg.substr(std::string("--sdf_cad_dir=").size());
+    } else {
+      argv[kept++] = argv[a];
     }
   }
+  argc = kept;
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
+  if (report && timing) samp::RunTimingSummary();
   if (report) samp::RunSignCheck();
+  if (report && !cad_dir.empty()) samp::RunCadCheck(cad_dir);
   return 0;
 }
