@@ -2,7 +2,8 @@
 // gram_avx512.cc). Declarations only: those translation units are compiled
 // with -mavx2/-mavx512f and must share no inline code with the rest of the
 // program (an inline function compiled twice with different instruction sets
-// is an ODR violation, and the linker may keep the AVX copy for everyone).
+// is an ODR violation, and the linker may keep the AVX copy for everyone;
+// tests/model/check_isa_objects.cmake checks their objects).
 #pragma once
 
 #include <cstdint>
