@@ -6,6 +6,9 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <limits>
+#include <string>
+#include <vector>
 
 #include "libsamp/core/error.h"
 #include "libsamp/scan/scanner.h"
@@ -270,6 +273,123 @@ TEST(Sdf, ParallelEqualsSerialAndTruncationClamps) {
   const Sdf truncated = ComputeSdf(mesh, scan, grid, options);
   for (size_t v = 0; v < serial.values.size(); ++v) {
     ASSERT_EQ(truncated.values[v], std::clamp(serial.values[v], -0.1f, 0.1f));
+  }
+}
+
+// The carving rule of docs/sdf.md applied to every voxel and every view,
+// without any grouping: true = outside. `distance` = |value| of ComputeSdf.
+std::vector<uint8_t> ReferenceCarving(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
+                                      const std::vector<float>& distance, float margin) {
+  const float h = float(grid.voxel_size);
+  const Eigen::Vector3f origin = grid.origin.cast<float>();
+  const size_t n = size_t(grid.NumVoxels());
+  std::vector<uint8_t> carved(n, 0), in_frustum(n, 0);
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  for (const ScanView& view : scan.views) {
+    const Eigen::Matrix3f rotation = view.camera_from_object.linear().cast<float>();
+    const Eigen::Vector3f translation = view.camera_from_object.translation().cast<float>();
+    const Eigen::Vector3f camera_center = view.camera_from_object.inverse().translation().cast<float>();
+    const PinholeCamera& camera = view.camera;
+    const float fx = float(camera.fx), fy = float(camera.fy), cx = float(camera.cx), cy = float(camera.cy);
+    const float lateral_per_depth =
+        float(0.55 * std::sqrt(1.0 / (camera.fx * camera.fx) + 1.0 / (camera.fy * camera.fy)));
+    const int coarse_width = (camera.width - 2) / 4 + 1, coarse_height = (camera.height - 2) / 4 + 1;
+    const float u_max = float(camera.width) - 0.5f, w_max = float(camera.height) - 0.5f;
+    for (int k = 0; k < grid.dims.z(); ++k) {
+      for (int j = 0; j < grid.dims.y(); ++j) {
+        for (int i = 0; i < grid.dims.x(); ++i) {
+          const size_t v = size_t(grid.Index(i, j, k));
+          if (carved[v]) continue;
+          const Eigen::Vector3f position(origin.x() + h * float(i), origin.y() + h * float(j),
+                                         origin.z() + h * float(k));
+          const Eigen::Vector3f pc = rotation * position + translation;
+          const float z = std::max(pc.z(), 1e-6f);
+          const float u = fx * pc.x() * (1.0f / z) + cx, w = fy * pc.y() * (1.0f / z) + cy;
+          const bool in_image = pc.z() > 1e-6f && u >= -0.5f && w >= -0.5f && u < u_max && w < w_max;
+          in_frustum[v] |= uint8_t(in_image);
+          if (!in_image) continue;
+          const float uc = std::clamp(u, 0.0f, u_max - 0.5f), wc = std::clamp(w, 0.0f, w_max - 0.5f);
+          const int pixel = int(wc + 0.5f) * camera.width + int(uc + 0.5f);
+          const float lateral = lateral_per_depth * z;
+          // Far voxels: the nearest coarse sample (every 4th pixel from 1) or pixel.
+          const float cu = (uc - 1.0f) * 0.25f + 0.5f, cw = (wc - 1.0f) * 0.25f + 0.5f;
+          const bool coarse = distance[v] > 4 * lateral && cu < float(coarse_width) && cw < float(coarse_height);
+          const float observed =
+              coarse ? view.depth[size_t((1 + 4 * int(cw)) * camera.width + 1 + 4 * int(cu))] : view.depth[size_t(pixel)];
+          if (distance[v] > lateral) {
+            carved[v] = observed == kInfinity || z < observed - margin;
+            continue;
+          }
+          // Near voxels: the plane of the triangle the pixel saw.
+          if (!(observed < kInfinity && z < observed + h)) continue;
+          const int32_t t = view.triangle[size_t(pixel)];
+          if (t < 0 || !scan.triangle_seen[size_t(t)]) continue;
+          const Eigen::Vector3i& f = mesh.triangles[size_t(t)];
+          const Eigen::Vector3f a = mesh.vertices[size_t(f[0])], b = mesh.vertices[size_t(f[1])],
+                                c = mesh.vertices[size_t(f[2])];
+          const Eigen::Vector3d nd = (b - a).cast<double>().cross((c - a).cast<double>());
+          const Eigen::Vector3f normal =
+              nd.norm() > 0 ? Eigen::Vector3f((nd / nd.norm()).cast<float>()) : Eigen::Vector3f::Zero();
+          const float offset = normal.dot(a);
+          const float side_camera = normal.dot(camera_center) - offset;
+          const float side_voxel = normal.dot(position) - offset;
+          const float on_plane = 1e-5f * h;
+          carved[v] = side_camera > 0.0f   ? side_voxel > margin - on_plane
+                      : side_camera < 0.0f ? side_voxel < on_plane - margin
+                                           : false;
+        }
+      }
+    }
+  }
+  std::vector<uint8_t> outside(n);
+  for (size_t v = 0; v < n; ++v) outside[v] = carved[v] || !in_frustum[v];
+  return outside;
+}
+
+// ComputeSdf decides whole blocks and cells of voxels per view where it can
+// (docs/sdf.md); the signs must be exactly those of the per-voxel rule.
+TEST(Sdf, GroupedCarvingEqualsThePerVoxelRule) {
+  struct Case {
+    const char* name;
+    Mesh mesh;
+    ScanOptions scan;
+    float margin;
+  };
+  std::vector<Case> cases;
+  Mesh ellipsoid = MakeSphereMesh(Eigen::Vector3d::Zero(), 1.0, 40, 80);
+  for (auto& v : ellipsoid.vertices) v = v.cwiseProduct(Eigen::Vector3f(0.9f, 0.35f, 0.45f));
+  cases.push_back({"ellipsoid", ellipsoid, TestScanOptions(), 0.0f});
+  ScanOptions odd = TestScanOptions();
+  odd.num_views = 37;
+  odd.width = 233;
+  odd.height = 157;
+  cases.push_back({"ellipsoid, 37 odd-sized views, margin", ellipsoid, odd, 0.02f});
+  Mesh open = MakeBoxMesh(Eigen::Vector3d(-0.6, -0.3, -0.4), Eigen::Vector3d(0.6, 0.3, 0.4));
+  open.triangles.erase(open.triangles.begin() + 4, open.triangles.begin() + 6);
+  open.Append(MakeBoxMesh(Eigen::Vector3d(-0.2, -0.1, -0.1), Eigen::Vector3d(0.2, 0.1, 0.1)));
+  cases.push_back({"open box with a box inside", open, TestScanOptions(), 0.0f});
+  ScanOptions one = TestScanOptions();
+  one.num_views = 3;
+  cases.push_back({"ellipsoid, 3 views", ellipsoid, one, 0.0f});
+  for (const Case& c : cases) {
+    const ScanResult scan = ScanMesh(c.mesh, c.scan);
+    const GridSpec grid = GridSpec::FromBox(Eigen::Vector3d(-1.1, -0.6, -0.7), Eigen::Vector3d(1.1, 0.6, 0.7), 0.04);
+    SdfOptions options;
+    options.carve_margin = c.margin;
+    options.min_inside_fraction = 0.0;
+    const Sdf sdf = ComputeSdf(c.mesh, scan, grid, options);
+    std::vector<float> distance(sdf.values.size());
+    for (size_t v = 0; v < distance.size(); ++v) distance[v] = std::abs(sdf.values[v]);
+    const std::vector<uint8_t> outside = ReferenceCarving(c.mesh, scan, grid, distance, c.margin);
+    int64_t differ = 0, inside = 0;
+    for (size_t v = 0; v < outside.size(); ++v) {
+      differ += std::signbit(sdf.values[v]) == bool(outside[v]);
+      inside += !outside[v];
+    }
+    std::printf("%s: %lld inside, %lld differ\n", c.name, static_cast<long long>(inside),
+                static_cast<long long>(differ));
+    EXPECT_EQ(differ, 0) << c.name;
+    if (std::string(c.name) != "open box with a box inside") EXPECT_GT(inside, 1000) << c.name;
   }
 }
 
