@@ -526,7 +526,8 @@ void RunCadCheck(const std::string& folder) {
                   static_cast<long long>(ours_inside), static_cast<long long>(vdb_inside),
                   static_cast<long long>(ambiguous), 1e3 * sdf_seconds);
     } catch (const Error& e) {
-      std::printf("  %-16s failed: %s\n", entry.name.c_str(), e.what());
+      std::printf("  %-16s not compared (%s): %s\n", entry.name.c_str(),
+                  entry.skip ? "skipped by the manifest" : "error", e.what());
     }
   }
 }
