@@ -352,6 +352,7 @@ struct Block {
   float min_distance = 0.f;  // smallest distance of the active voxels
   bool seen = false;         // some view had all of them in its image
   bool per_voxel = false;    // voxels near the surface: always tested one by one
+  bool stale = true;         // (cells) lo, hi, min_distance to be recomputed
 };
 
 enum class BlockDecision { kUndecided, kOutOfView, kNoneCarved, kAllCarved };
@@ -579,6 +580,7 @@ void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
   std::vector<Active> active;
   active.reserve(size_t(nx) * size_t(ny) * size_t(std::max(0, k_end - k_begin)));
   std::vector<Block> blocks;
+  std::vector<Block> cells;  // 8 per block (the 2^3 cells of block b at 8 * b)
   std::vector<Active> near;
   for (int bk = k_begin; bk < k_end; bk += kBlock) {
     for (int bj = 0; bj < ny; bj += kBlock) {
@@ -605,6 +607,10 @@ void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
         if (block.count > 0) {
           Bound(&active[size_t(block.begin)], active.data() + active.size(), &block);
           blocks.push_back(block);
+          // Its cells: only counts here, bounds when first needed.
+          cells.resize(cells.size() + 8);
+          Block* cell = &cells[cells.size() - 8];
+          for (int a = block.begin; a < int(active.size()); ++a) ++cell[active[size_t(a)].cell].count;
         }
         if (!near.empty()) {
           Block near_block;
@@ -613,6 +619,7 @@ void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
           near_block.per_voxel = true;
           active.insert(active.end(), near.begin(), near.end());
           blocks.push_back(near_block);
+          cells.resize(cells.size() + 8);  // unused; keeps cells[8 * b] for block b
         }
       }
     }
@@ -625,7 +632,8 @@ void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
   for (const CarveView& view : views) {
     if (remaining == 0) break;
     const VoxelCarver carver(view, triangles, triangle_index, h, margin);
-    for (Block& block : blocks) {
+    for (size_t b = 0; b < blocks.size(); ++b) {
+      Block& block = blocks[b];
       if (block.count == 0) continue;
       Active* segment = &active[size_t(block.begin)];
       int kept = 0;
@@ -648,13 +656,16 @@ void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
         uint8_t carved[kBlock * kBlock * kBlock];
         int undecided[kBlock * kBlock * kBlock];
         int num_undecided = 0;
-        for (int a = 0; a < block.count;) {
-          int end = a + 1;
-          while (end < block.count && segment[end].cell == segment[a].cell) ++end;
-          Block cell;
-          Bound(segment + a, segment + end, &cell);
-          cell.seen = block.seen;
-          const BlockDecision cell_decision = DecideBlock(view, cell, margin);
+        Block* cell = &cells[8 * b];
+        for (int c = 0, a = 0; c < 8; ++c) {
+          const int end = a + cell[c].count;
+          if (end == a) continue;
+          if (cell[c].stale) {
+            Bound(segment + a, segment + end, &cell[c]);
+            cell[c].stale = false;
+          }
+          cell[c].seen = block.seen;
+          const BlockDecision cell_decision = DecideBlock(view, cell[c], margin);
           // Not carved and all in the image: they are in the frustum.
           const uint8_t seen = uint8_t(cell_decision == BlockDecision::kNoneCarved);
           for (; a < end; ++a) {
@@ -665,6 +676,11 @@ void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
         }
         carver.Test(segment, undecided, num_undecided, carved);
         for (int a = 0; a < block.count; ++a) {
+          if (carved[a]) {
+            Block& owner = cell[segment[a].cell];
+            --owner.count;
+            owner.stale = true;
+          }
           segment[kept] = segment[a];
           kept += int(!carved[a]);
         }
