@@ -3,6 +3,9 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <limits>
+#include <utility>
 
 #include "libsamp/core/error.h"
 
@@ -46,22 +49,26 @@ double SdfCost::Psi(double s, double k, double* d_psi) {
 
 bool SdfCost::Evaluate(double const* const* parameters, double* residuals,
                        double** jacobians) const {
-  const double* z = parameters[0];
-  const double* pose = parameters[1];
+  const int nr = lookup_->num_components();
+  double* jz = jacobians ? jacobians[0] : nullptr;
+  double* jp = jacobians ? jacobians[1] : nullptr;
+  return EvaluateRows(parameters[0], parameters[1], residuals, jz, nr, jp, 4);
+}
+
+bool SdfCost::EvaluateRows(const double* z, const double* pose, double* residuals, double* jz,
+                           int jz_stride, double* jp, int jp_stride) const {
   const int nr = lookup_->num_components();
   const int n = num_residuals();
   const double c = std::cos(pose[3]), s = std::sin(pose[3]);
-  double* jz = jacobians ? jacobians[0] : nullptr;
-  double* jp = jacobians ? jacobians[1] : nullptr;
-  const bool need_point_gradient = jp != nullptr;
+  const double* phi_z = lookup_->DenseCached(z);
   for (int i = 0; i < n; ++i) {
     const double dx = points_[3 * i] - pose[0];
     const double dy = points_[3 * i + 1] - pose[1];
     const double dz = points_[3 * i + 2] - pose[2];
     const double o[3] = {c * dx - s * dz, dy, s * dx + c * dz};
     double g[3];
-    double* dz_row = jz ? jz + size_t(i) * nr : nullptr;
-    const double phi = lookup_->Evaluate(z, o, need_point_gradient ? g : nullptr, dz_row);
+    double* dz_row = jz ? jz + size_t(i) * jz_stride : nullptr;
+    const double phi = lookup_->EvaluateDense(phi_z, o, jp ? g : nullptr, dz_row);
     if (!std::isfinite(phi)) return false;
     double d_psi = 1.0;
     const double scaled = phi * inv_sigmas_[i];  // s_i = phi / sigma_i
@@ -71,7 +78,7 @@ bool SdfCost::Evaluate(double const* const* parameters, double* residuals,
       for (int r = 0; r < nr; ++r) dz_row[r] *= f;
     }
     if (jp) {
-      double* row = jp + size_t(i) * 4;
+      double* row = jp + size_t(i) * jp_stride;
       // R grad = (c g0 + s g2, g1, -s g0 + c g2).
       row[0] = -f * (c * g[0] + s * g[2]);
       row[1] = -f * g[1];
@@ -82,11 +89,63 @@ bool SdfCost::Evaluate(double const* const* parameters, double* residuals,
   return true;
 }
 
+namespace {
+
+// Spreads the low 10 bits of v to every third bit (Morton code).
+uint32_t Spread3(uint32_t v) {
+  v &= 0x3ff;
+  v = (v | (v << 16)) & 0x30000ff;
+  v = (v | (v << 8)) & 0x300f00f;
+  v = (v | (v << 4)) & 0x30c30c3;
+  v = (v | (v << 2)) & 0x9249249;
+  return v;
+}
+
+// The points (and sigmas) in Morton order of their voxel-sized cells, so that
+// successive lookups touch neighbouring grid rows (the cost is a sum: the
+// order does not change it).
+std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SpatiallySorted(
+    const std::vector<Eigen::Vector3d>& points, const std::vector<double>& sigmas, double cell) {
+  SAMP_CHECK(points.size() == sigmas.size())
+      << "SdfCost: " << points.size() << " points but " << sigmas.size() << " sigmas";
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  for (const Eigen::Vector3d& p : points) lo = lo.cwiseMin(p);
+  std::vector<std::pair<uint32_t, size_t>> keys(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    uint32_t key = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double u = (points[i][a] - lo[a]) / cell;
+      const uint32_t q = std::isfinite(u) ? uint32_t(std::min(u, 1023.0)) : 0u;
+      key |= Spread3(q) << a;
+    }
+    keys[i] = {key, i};
+  }
+  std::sort(keys.begin(), keys.end());
+  std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> out;
+  out.first.reserve(points.size());
+  out.second.reserve(points.size());
+  for (const auto& [key, i] : keys) {
+    out.first.push_back(points[i]);
+    out.second.push_back(sigmas[i]);
+  }
+  return out;
+}
+
+}  // namespace
+
 CompressedSdfCost::CompressedSdfCost(const ShapeLookup* lookup,
                                      const std::vector<Eigen::Vector3d>& points_in_world,
                                      const std::vector<double>& sigmas, double huber_threshold,
                                      double weight)
-    : full_(lookup, points_in_world, sigmas, huber_threshold, weight),
+    : CompressedSdfCost(lookup,
+                        SpatiallySorted(points_in_world, sigmas,
+                                        lookup != nullptr ? lookup->grid().voxel_size : 1.0),
+                        huber_threshold, weight) {}
+
+CompressedSdfCost::CompressedSdfCost(const ShapeLookup* lookup,
+                                     const std::pair<std::vector<Eigen::Vector3d>, std::vector<double>>& sorted,
+                                     double huber_threshold, double weight)
+    : full_(lookup, sorted.first, sorted.second, huber_threshold, weight),
       num_components_(lookup->num_components()) {
   set_num_residuals(num_components_ + 4 + 1);
   mutable_parameter_block_sizes()->push_back(num_components_);
@@ -98,35 +157,33 @@ bool CompressedSdfCost::Evaluate(double const* const* parameters, double* residu
   using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const int n = full_.num_residuals();
   const int nr = num_components_, m = nr + 4;
-  // Per-thread scratch (N x R, N x 4, N): avoids large allocations per call.
-  thread_local std::vector<double> r_buffer, jz_buffer, jp_buffer;
+  // Per-thread scratch (N and N x (R + 4)): avoids large allocations per call.
+  thread_local std::vector<double> r_buffer, j_buffer;
   r_buffer.resize(size_t(n));
   const bool need_jacobians = jacobians && (jacobians[0] || jacobians[1]);
   if (!need_jacobians) {
-    if (!full_.Evaluate(parameters, r_buffer.data(), nullptr)) return false;
+    if (!full_.EvaluateRows(parameters[0], parameters[1], r_buffer.data(), nullptr, 0, nullptr, 0)) {
+      return false;
+    }
     const Eigen::Map<const Eigen::VectorXd> r(r_buffer.data(), n);
     for (int k = 0; k < m; ++k) residuals[k] = 0.0;
     residuals[m] = r.norm();
     return true;
   }
-  jz_buffer.resize(size_t(n) * nr);
-  jp_buffer.resize(size_t(n) * 4);
-  double* full_jacobians[2] = {jz_buffer.data(), jp_buffer.data()};
-  if (!full_.Evaluate(parameters, r_buffer.data(), full_jacobians)) return false;
+  // J = [d/dz | d/dpose], one row per point.
+  j_buffer.resize(size_t(n) * m);
+  if (!full_.EvaluateRows(parameters[0], parameters[1], r_buffer.data(), j_buffer.data(), m,
+                          j_buffer.data() + nr, m)) {
+    return false;
+  }
   const Eigen::Map<const Eigen::VectorXd> r(r_buffer.data(), n);
-  const Eigen::Map<const RowMatrix> jz(jz_buffer.data(), n, nr);
-  const Eigen::Map<const RowMatrix> jp(jp_buffer.data(), n, 4);
-  Eigen::MatrixXd h(m, m);
-  h.topLeftCorner(nr, nr).noalias() = jz.transpose() * jz;
-  h.topRightCorner(nr, 4).noalias() = jz.transpose() * jp;
-  h.bottomRightCorner(4, 4).noalias() = jp.transpose() * jp;
-  h.bottomLeftCorner(4, nr) = h.topRightCorner(nr, 4).transpose();
-  Eigen::VectorXd g(m);
-  g.head(nr).noalias() = jz.transpose() * r;
-  g.tail(4).noalias() = jp.transpose() * r;
+  const Eigen::Map<const RowMatrix> j(j_buffer.data(), n, m);
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(m, m);
+  h.selfadjointView<Eigen::Lower>().rankUpdate(j.transpose());
+  const Eigen::VectorXd g = j.transpose() * r;
   const double eps = 1e-12 * std::max(h.trace(), 1e-300);
   h.diagonal().array() += eps;
-  Eigen::LLT<Eigen::MatrixXd> llt(h);
+  Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(h);
   if (llt.info() != Eigen::Success) return false;
   const Eigen::VectorXd rc = llt.matrixL().solve(g);
   for (int k = 0; k < m; ++k) residuals[k] = rc[k];

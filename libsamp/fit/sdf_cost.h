@@ -23,6 +23,7 @@
 #include <ceres/cost_function.h>
 
 #include <Eigen/Core>
+#include <utility>
 #include <vector>
 
 #include "libsamp/fit/shape_lookup.h"
@@ -44,6 +45,13 @@ class SdfCost : public ceres::CostFunction {
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
+
+  // Evaluate() with the Jacobian rows written with strides: row i of d/dz
+  // (R values) at jz + i jz_stride, of d/d(t, theta) (4 values) at
+  // jp + i jp_stride; null jz / jp skip them. phi_z comes from the lookup's
+  // per-thread dense grid of z (ShapeLookup::DenseCached).
+  bool EvaluateRows(const double* z, const double* pose, double* residuals, double* jz, int jz_stride,
+                    double* jp, int jp_stride) const;
 
   // The Huber robustifier psi and its derivative (exposed for tests).
   static double Psi(double s, double k, double* d_psi);
@@ -87,7 +95,11 @@ class CompressedSdfCost : public ceres::CostFunction {
                 double** jacobians) const override;
 
  private:
-  SdfCost full_;
+  CompressedSdfCost(const ShapeLookup* lookup,
+                    const std::pair<std::vector<Eigen::Vector3d>, std::vector<double>>& sorted,
+                    double huber_threshold, double weight);
+
+  SdfCost full_;  // on the points in Morton order (locality of the lookups)
   int num_components_;
 };
 

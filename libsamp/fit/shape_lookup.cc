@@ -1,6 +1,7 @@
 #include "libsamp/fit/shape_lookup.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 
@@ -8,7 +9,114 @@
 
 namespace samp {
 
-ShapeLookup::ShapeLookup(const ShapeModel& model) : grid_(model.grid) {
+namespace {
+
+std::atomic<uint64_t> next_lookup_id{1};
+
+// Where a point falls in the grid: the 8 corner indices of its cell, the
+// fractions inside it and the part of the point outside the grid box.
+struct Cell {
+  int64_t index[8];
+  double f[3];
+  double outside[3];
+  bool clamped[3];
+  double distance;  // to the grid box, 0 inside
+};
+
+// False for a non-finite point.
+inline bool Locate(const GridSpec& grid, const Eigen::Vector3d& max_corner, double inv_voxel,
+                   const double* point, Cell* cell) {
+  double q[3];
+  double outside_sq = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    q[a] = std::min(std::max(point[a], grid.origin[a]), max_corner[a]);
+    cell->outside[a] = point[a] - q[a];
+    cell->clamped[a] = cell->outside[a] != 0.0;
+    outside_sq += cell->outside[a] * cell->outside[a];
+  }
+  if (!std::isfinite(outside_sq)) return false;
+  cell->distance = outside_sq > 0.0 ? std::sqrt(outside_sq) : 0.0;
+  int i0[3];
+  for (int a = 0; a < 3; ++a) {
+    const double u = (q[a] - grid.origin[a]) * inv_voxel;
+    const int i = std::min(std::max(int(u), 0), grid.dims[a] - 2);  // u >= 0: int() floors
+    i0[a] = i;
+    cell->f[a] = u - i;
+  }
+  const int64_t nx = grid.dims.x(), nxy = nx * grid.dims.y();
+  const int64_t base = i0[0] + nx * i0[1] + nxy * i0[2];
+  const int64_t offsets[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
+  for (int k = 0; k < 8; ++k) cell->index[k] = base + offsets[k];
+  return true;
+}
+
+// Trilinear value of the corner values c (order x fastest) plus the distance
+// to the box, and its gradient in the point (the box's outward direction on
+// clamped axes).
+inline double Interpolate(const Cell& cell, const double* c, double inv_voxel, double* d_point) {
+  const double fx = cell.f[0], fy = cell.f[1], fz = cell.f[2];
+  const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
+  const double c00 = gx * c[0] + fx * c[1], c10 = gx * c[2] + fx * c[3];
+  const double c01 = gx * c[4] + fx * c[5], c11 = gx * c[6] + fx * c[7];
+  const double c0 = gy * c00 + fy * c10, c1 = gy * c01 + fy * c11;
+  if (d_point) {
+    double g[3];
+    g[2] = (c1 - c0) * inv_voxel;
+    g[1] = (gz * (c10 - c00) + fz * (c11 - c01)) * inv_voxel;
+    g[0] = (gz * (gy * (c[1] - c[0]) + fy * (c[3] - c[2])) +
+            fz * (gy * (c[5] - c[4]) + fy * (c[7] - c[6]))) *
+           inv_voxel;
+    for (int a = 0; a < 3; ++a) d_point[a] = cell.clamped[a] ? cell.outside[a] / cell.distance : g[a];
+  }
+  return gz * c0 + fz * c1 + cell.distance;
+}
+
+// d phi / dz = sum_k w_k W_k over the 8 corners; kR > 0 fixes R at compile time.
+template <int kR>
+inline void CodeGradient(const Cell& cell, const double* components, int num_components, double* d_z) {
+  const int nr = kR > 0 ? kR : num_components;
+  const double fx = cell.f[0], fy = cell.f[1], fz = cell.f[2];
+  const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
+  const double w[8] = {gx * gy * gz, fx * gy * gz, gx * fy * gz, fx * fy * gz,
+                       gx * gy * fz, fx * gy * fz, gx * fy * fz, fx * fy * fz};
+  double acc[kR > 0 ? kR : 1];
+  double* out = kR > 0 ? acc : d_z;
+  for (int r = 0; r < nr; ++r) out[r] = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const double* row = components + size_t(cell.index[k]) * nr;
+    for (int r = 0; r < nr; ++r) out[r] += w[k] * row[r];
+  }
+  if (kR > 0) {
+    for (int r = 0; r < nr; ++r) d_z[r] = out[r];
+  }
+}
+
+inline void CodeGradientAnyR(const Cell& cell, const double* components, int num_components, double* d_z) {
+  switch (num_components) {
+    case 5: return CodeGradient<5>(cell, components, 5, d_z);
+    case 10: return CodeGradient<10>(cell, components, 10, d_z);
+    default: return CodeGradient<0>(cell, components, num_components, d_z);
+  }
+}
+
+double NaNResult(int num_components, double* d_point, double* d_z) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (d_point) d_point[0] = d_point[1] = d_point[2] = nan;
+  if (d_z) std::fill(d_z, d_z + num_components, nan);
+  return nan;
+}
+
+// The per-thread dense grid of the last code asked for.
+struct DenseCache {
+  uint64_t owner = 0;
+  std::vector<double> code;
+  std::vector<double> phi;
+};
+
+}  // namespace
+
+ShapeLookup::ShapeLookup(const ShapeModel& model)
+    : grid_(model.grid), id_(next_lookup_id.fetch_add(1)) {
   grid_.Check();
   const int64_t d = grid_.NumVoxels();
   num_components_ = int(model.components.cols());
@@ -21,112 +129,61 @@ ShapeLookup::ShapeLookup(const ShapeModel& model) : grid_(model.grid) {
       << " components";
   SAMP_CHECK(num_components_ >= 1) << "shape model has no components";
   SAMP_CHECK((model.eigenvalues.array() > 0.0).all()) << "shape model eigenvalues must be > 0";
-  stride_ = num_components_ + 1;
-  table_.resize(size_t(d) * stride_);
+  mean_.resize(size_t(d));
+  components_.resize(size_t(d) * num_components_);
   for (int64_t v = 0; v < d; ++v) {
-    double* row = &table_[size_t(v) * stride_];
-    row[0] = model.mean[v];
-    for (int r = 0; r < num_components_; ++r) row[1 + r] = model.components(v, r);
+    mean_[size_t(v)] = model.mean[v];
+    double* row = &components_[size_t(v) * num_components_];
+    for (int r = 0; r < num_components_; ++r) row[r] = model.components(v, r);
   }
   sigmas_ = model.eigenvalues.cwiseSqrt();
   max_corner_ = grid_.MaxCorner();
   inv_voxel_ = 1.0 / grid_.voxel_size;
 }
 
-namespace {
-
-// The lookup with the number of components fixed at compile time (kR > 0)
-// or at run time (kR = 0): the fixed version lets the compiler unroll the
-// 8 x (R + 1) inner loops.
-template <int kR>
-double EvaluateKernel(const GridSpec& grid_, const Eigen::Vector3d& max_corner_, double inv_voxel_,
-                      const std::vector<double>& table_, int num_components, const double* z,
-                      const double* point, double* d_point, double* d_z) {
-  const int nr = kR > 0 ? kR : num_components;
-  const int stride_ = nr + 1;
-  // Clamp to the grid box; remember which axes were clamped.
-  double q[3], outside[3];
-  bool clamped[3];
-  double outside_sq = 0.0;
-  for (int a = 0; a < 3; ++a) {
-    const double lo = grid_.origin[a], hi = max_corner_[a];
-    q[a] = std::min(std::max(point[a], lo), hi);
-    outside[a] = point[a] - q[a];
-    clamped[a] = outside[a] != 0.0;
-    outside_sq += outside[a] * outside[a];
-  }
-  if (!std::isfinite(outside_sq)) {
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    if (d_point) d_point[0] = d_point[1] = d_point[2] = nan;
-    if (d_z) std::fill(d_z, d_z + nr, nan);
-    return nan;
-  }
-  int i0[3];
-  double f[3];
-  for (int a = 0; a < 3; ++a) {
-    const double u = (q[a] - grid_.origin[a]) * inv_voxel_;
-    int i = int(std::floor(u));
-    i = std::min(std::max(i, 0), grid_.dims[a] - 2);
-    i0[a] = i;
-    f[a] = u - i;
-  }
-  const int64_t nx = grid_.dims.x(), nxy = nx * grid_.dims.y();
-  const int64_t base = i0[0] + nx * i0[1] + nxy * i0[2];
-  const int64_t offsets[8] = {base,          base + 1,          base + nx,          base + nx + 1,
-                              base + nxy,    base + nxy + 1,    base + nxy + nx,    base + nxy + nx + 1};
-  // Corner values phi_c = mu_c + W_c z.
-  double c[8];
-  for (int k = 0; k < 8; ++k) {
-    const double* row = &table_[size_t(offsets[k]) * stride_];
-    double s = row[0];
-    for (int r = 0; r < nr; ++r) s += row[1 + r] * z[r];
-    c[k] = s;
-  }
-  const double fx = f[0], fy = f[1], fz = f[2];
-  const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
-  // Interpolate along x, then y, then z.
-  const double c00 = gx * c[0] + fx * c[1], c10 = gx * c[2] + fx * c[3];
-  const double c01 = gx * c[4] + fx * c[5], c11 = gx * c[6] + fx * c[7];
-  const double c0 = gy * c00 + fy * c10, c1 = gy * c01 + fy * c11;
-  double value = gz * c0 + fz * c1;
-  const double distance = std::sqrt(outside_sq);
-  value += distance;
-  if (d_point) {
-    double g[3];
-    g[2] = (c1 - c0) * inv_voxel_;
-    g[1] = (gz * (c10 - c00) + fz * (c11 - c01)) * inv_voxel_;
-    g[0] = (gz * (gy * (c[1] - c[0]) + fy * (c[3] - c[2])) +
-            fz * (gy * (c[5] - c[4]) + fy * (c[7] - c[6]))) *
-           inv_voxel_;
-    for (int a = 0; a < 3; ++a) {
-      d_point[a] = clamped[a] ? outside[a] / distance : g[a];
-    }
-  }
-  if (d_z) {
-    const double w[8] = {gx * gy * gz, fx * gy * gz, gx * fy * gz, fx * fy * gz,
-                         gx * gy * fz, fx * gy * fz, gx * fy * fz, fx * fy * fz};
-    std::fill(d_z, d_z + nr, 0.0);
-    for (int k = 0; k < 8; ++k) {
-      const double* row = &table_[size_t(offsets[k]) * stride_ + 1];
-      for (int r = 0; r < nr; ++r) d_z[r] += w[k] * row[r];
-    }
-  }
-  return value;
-}
-
-}  // namespace
-
 double ShapeLookup::Evaluate(const double* z, const double* point, double* d_point,
                              double* d_z) const {
-  switch (num_components_) {
-    case 5:
-      return EvaluateKernel<5>(grid_, max_corner_, inv_voxel_, table_, 5, z, point, d_point, d_z);
-    case 10:
-      return EvaluateKernel<10>(grid_, max_corner_, inv_voxel_, table_, 10, z, point, d_point, d_z);
-    default:
-      return EvaluateKernel<0>(grid_, max_corner_, inv_voxel_, table_, num_components_, z, point,
-                               d_point, d_z);
+  Cell cell;
+  if (!Locate(grid_, max_corner_, inv_voxel_, point, &cell)) return NaNResult(num_components_, d_point, d_z);
+  double c[8];
+  for (int k = 0; k < 8; ++k) {
+    const double* row = &components_[size_t(cell.index[k]) * num_components_];
+    double s = mean_[size_t(cell.index[k])];
+    for (int r = 0; r < num_components_; ++r) s += row[r] * z[r];
+    c[k] = s;
   }
+  if (d_z) CodeGradientAnyR(cell, components_.data(), num_components_, d_z);
+  return Interpolate(cell, c, inv_voxel_, d_point);
+}
+
+double ShapeLookup::EvaluateDense(const double* phi, const double* point, double* d_point,
+                                  double* d_z) const {
+  Cell cell;
+  if (!Locate(grid_, max_corner_, inv_voxel_, point, &cell)) return NaNResult(num_components_, d_point, d_z);
+  double c[8];
+  for (int k = 0; k < 8; ++k) c[k] = phi[cell.index[k]];
+  if (d_z) CodeGradientAnyR(cell, components_.data(), num_components_, d_z);
+  return Interpolate(cell, c, inv_voxel_, d_point);
+}
+
+const double* ShapeLookup::DenseCached(const double* z) const {
+  thread_local DenseCache cache;
+  const size_t nr = size_t(num_components_);
+  if (cache.owner == id_ && cache.code.size() == nr && std::equal(z, z + nr, cache.code.begin())) {
+    return cache.phi.data();
+  }
+  const size_t d = mean_.size();
+  cache.owner = 0;  // invalid while being filled
+  cache.code.assign(z, z + nr);
+  cache.phi.resize(d);
+  for (size_t v = 0; v < d; ++v) {
+    const double* row = &components_[v * nr];
+    double s = mean_[v];
+    for (size_t r = 0; r < nr; ++r) s += row[r] * z[r];
+    cache.phi[v] = s;
+  }
+  cache.owner = id_;
+  return cache.phi.data();
 }
 
 double ShapeLookup::Evaluate(const Eigen::VectorXd& z, const Eigen::Vector3d& point,
@@ -143,12 +200,8 @@ std::vector<float> ShapeLookup::Dense(const Eigen::VectorXd& z) const {
       << "shape code has " << z.size() << " values, model has " << num_components_;
   const int64_t d = grid_.NumVoxels();
   std::vector<float> out(static_cast<size_t>(d));
-  for (int64_t v = 0; v < d; ++v) {
-    const double* row = &table_[size_t(v) * stride_];
-    double s = row[0];
-    for (int r = 0; r < num_components_; ++r) s += row[1 + r] * z[r];
-    out[size_t(v)] = float(s);
-  }
+  const double* phi = DenseCached(z.data());
+  for (int64_t v = 0; v < d; ++v) out[size_t(v)] = float(phi[v]);
   return out;
 }
 

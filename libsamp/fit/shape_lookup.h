@@ -1,15 +1,20 @@
 // Fast trilinear lookups of phi_z = W z + mu for the fitter's cost functions.
-// The model's mean and components are re-laid out once, voxel-major
-// ([mu, W_1 .. W_R] contiguous per voxel, doubles), so that one lookup reads
-// 8 contiguous rows of R + 1 numbers: value, gradient in the point and
-// gradient in the code in ~8 (R + 1) + 30 multiply-adds, no allocation.
-// Same maths as ShapeModel::Evaluate, including the outside rule: outside the
-// grid box the value is phi_z at the nearest box point plus the distance to the
-// box, so the gradient never vanishes and -gradient points back into the grid.
+// The model's components are re-laid out once, voxel-major (W_1 .. W_R
+// contiguous per voxel, doubles), so that d phi / dz reads 8 contiguous rows
+// of R numbers. Two ways to get the value:
+//  - Evaluate(z, ..): the 8 corner values mu_c + W_c z, ~8 (R + 1) multiply-adds;
+//  - EvaluateDense(phi, ..) on phi_z sampled on the whole grid once
+//    (DenseCached(z)): 8 reads. The fitter evaluates ~10^5 points per code,
+//    so it pays the D (R + 1) multiply-adds of the dense grid once per
+//    evaluation and then only reads.
+// Outside rule (all lookups): outside the grid box the value is phi_z at the
+// nearest box point plus the distance to the box, so the gradient never
+// vanishes and -gradient points back into the grid.
 // Immutable after construction; const methods are safe to call concurrently.
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "libsamp/core/grid_spec.h"
@@ -34,6 +39,17 @@ class ShapeLookup {
   double Evaluate(const Eigen::VectorXd& z, const Eigen::Vector3d& point,
                   Eigen::Vector3d* d_point = nullptr, Eigen::VectorXd* d_z = nullptr) const;
 
+  // phi_z on the whole grid (D doubles, GridSpec::Index order), computed on
+  // the first call for a code and cached per thread (one code per thread), so
+  // the frame blocks of one Ceres evaluation share it. The pointer is valid
+  // until the same thread asks for another code (or another lookup's).
+  const double* DenseCached(const double* z) const;
+
+  // phi_z(point) from a dense grid `phi` = DenseCached(z), with optional
+  // d/dpoint (3) and d/dz (R; independent of z: the trilinear weights on W).
+  // Same value and gradients as Evaluate(z, ..) up to rounding.
+  double EvaluateDense(const double* phi, const double* point, double* d_point, double* d_z) const;
+
   // Dense phi_z on the grid (D floats, GridSpec::Index order).
   std::vector<float> Dense(const Eigen::VectorXd& z) const;
 
@@ -45,8 +61,9 @@ class ShapeLookup {
  private:
   GridSpec grid_;
   int num_components_ = 0;
-  int stride_ = 1;                   // R + 1
-  std::vector<double> table_;        // D x (R + 1), voxel-major
+  uint64_t id_ = 0;                  // tags this lookup's entries in the per-thread cache
+  std::vector<double> mean_;         // D
+  std::vector<double> components_;   // D x R, voxel-major
   Eigen::VectorXd sigmas_;
   Eigen::Vector3d max_corner_;
   double inv_voxel_ = 1.0;
