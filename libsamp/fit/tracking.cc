@@ -64,13 +64,47 @@ std::vector<int> HungarianRowsLeCols(const std::vector<double>& cost, int rows, 
   return col_of_row;
 }
 
+// Constant-velocity Kalman filter of a box centre in the world:
+// state (position, velocity), 6 x 6 covariance.
 struct TrackState {
   std::vector<ObjectLabel> detections;
-  Eigen::Vector3d last_center_in_world = Eigen::Vector3d::Zero();
-  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();  // m/s, world
-  bool has_velocity = false;
+  Eigen::Matrix<double, 6, 1> state = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Identity();
   int last_frame = 0;
 };
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+// Covariance of a detected centre (world), from the noise model in the camera.
+Eigen::Matrix3d DetectionCovariance(const Eigen::Vector3d& center_in_camera,
+                                    const Eigen::Matrix3d& world_from_camera_rotation,
+                                    const TrackerOptions& o) {
+  Eigen::Vector3d ray(center_in_camera.x(), 0.0, center_in_camera.z());
+  const double d = ray.norm();
+  ray = d > 1e-9 ? Eigen::Vector3d(ray / d) : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d lateral(ray.z(), 0.0, -ray.x());
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
+  const double s_depth = o.depth_sigma_a + o.depth_sigma_b * d * d;
+  const double s_lateral = o.lateral_sigma_a + o.lateral_sigma_b * d;
+  const Eigen::Matrix3d in_camera = s_depth * s_depth * ray * ray.transpose() +
+                                    s_lateral * s_lateral * lateral * lateral.transpose() +
+                                    o.height_sigma * o.height_sigma * up * up.transpose();
+  return world_from_camera_rotation * in_camera * world_from_camera_rotation.transpose();
+}
+
+// Prediction dt seconds ahead (white-acceleration process noise).
+void Predict(double dt, double acceleration_sigma, Eigen::Matrix<double, 6, 1>* state, Matrix6d* covariance) {
+  Matrix6d f = Matrix6d::Identity();
+  f.topRightCorner<3, 3>() = dt * Eigen::Matrix3d::Identity();
+  const double q = acceleration_sigma * acceleration_sigma;
+  Matrix6d noise = Matrix6d::Zero();
+  noise.topLeftCorner<3, 3>() = q * dt * dt * dt * dt / 4.0 * Eigen::Matrix3d::Identity();
+  noise.topRightCorner<3, 3>() = q * dt * dt * dt / 2.0 * Eigen::Matrix3d::Identity();
+  noise.bottomLeftCorner<3, 3>() = noise.topRightCorner<3, 3>();
+  noise.bottomRightCorner<3, 3>() = q * dt * dt * Eigen::Matrix3d::Identity();
+  *state = f * *state;
+  *covariance = f * *covariance * f.transpose() + noise;
+}
 
 std::string DescribeShortTrack(const std::vector<ObjectLabel>& detections) {
   std::ostringstream s;
@@ -82,9 +116,12 @@ std::string DescribeShortTrack(const std::vector<ObjectLabel>& detections) {
 }  // namespace
 
 bool TrackerOptions::Check() const {
-  SAMP_CHECK(gate_distance > 0) << "TrackerOptions.gate_distance must be > 0";
-  SAMP_CHECK(gate_growth >= 0) << "TrackerOptions.gate_growth must be >= 0";
-  SAMP_CHECK(max_speed >= 0) << "TrackerOptions.max_speed must be >= 0";
+  SAMP_CHECK(depth_sigma_a > 0 && depth_sigma_b >= 0 && lateral_sigma_a > 0 && lateral_sigma_b >= 0 &&
+             height_sigma > 0)
+      << "TrackerOptions: detector noise sigmas must be > 0 (the *_b terms >= 0)";
+  SAMP_CHECK(acceleration_sigma > 0) << "TrackerOptions.acceleration_sigma must be > 0";
+  SAMP_CHECK(max_speed > 0) << "TrackerOptions.max_speed must be > 0";
+  SAMP_CHECK(gate_chi2 > 0) << "TrackerOptions.gate_chi2 must be > 0";
   SAMP_CHECK(max_misses >= 0) << "TrackerOptions.max_misses must be >= 0";
   SAMP_CHECK(min_track_length >= 1) << "TrackerOptions.min_track_length must be >= 1";
   SAMP_CHECK(frame_rate_hz > 0) << "TrackerOptions.frame_rate_hz must be > 0";
@@ -152,21 +189,30 @@ std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& fram
     const int num = static_cast<int>(frame.detections.size());
     num_detections += num;
     std::vector<Eigen::Vector3d> centers(num);
-    for (int k = 0; k < num; ++k) centers[k] = frame.world_from_camera * DetectionCenter(frame.detections[k]);
+    std::vector<Eigen::Matrix3d> noise(num);
+    for (int k = 0; k < num; ++k) {
+      const Eigen::Vector3d in_camera = DetectionCenter(frame.detections[k]);
+      centers[k] = frame.world_from_camera * in_camera;
+      noise[k] = DetectionCovariance(in_camera, frame.world_from_camera.linear(), options);
+    }
 
+    // Predict every live track to this frame; gate and cost by the squared
+    // Mahalanobis distance of each detection to the prediction.
     const int rows = static_cast<int>(active.size());
+    std::vector<Eigen::Matrix<double, 6, 1>> predicted(rows);
+    std::vector<Matrix6d> predicted_covariance(rows);
     std::vector<double> cost(static_cast<size_t>(rows) * num, kNoAssignment);
     for (int a = 0; a < rows; ++a) {
       const TrackState& track = tracks[active[a]];
-      const int elapsed = frame.frame - track.last_frame;
-      const double dt = elapsed / options.frame_rate_hz;
-      const Eigen::Vector3d predicted = track.last_center_in_world + track.velocity * dt;
-      const double gate = track.has_velocity
-                              ? options.gate_distance + options.gate_growth * (elapsed - 1)
-                              : options.gate_distance + options.max_speed * dt;
+      const double dt = (frame.frame - track.last_frame) / options.frame_rate_hz;
+      predicted[a] = track.state;
+      predicted_covariance[a] = track.covariance;
+      Predict(dt, options.acceleration_sigma, &predicted[a], &predicted_covariance[a]);
       for (int k = 0; k < num; ++k) {
-        const double distance = (centers[k] - predicted).norm();
-        if (distance <= gate) cost[static_cast<size_t>(a) * num + k] = distance;
+        const Eigen::Vector3d innovation = centers[k] - predicted[a].head<3>();
+        const Eigen::Matrix3d s = predicted_covariance[a].topLeftCorner<3, 3>() + noise[k];
+        const double d2 = innovation.dot(s.ldlt().solve(innovation));
+        if (d2 <= options.gate_chi2) cost[static_cast<size_t>(a) * num + k] = d2;
       }
     }
     const std::vector<int> assignment = SolveAssignment(cost, rows, num);
@@ -176,10 +222,13 @@ std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& fram
       if (k < 0) continue;
       taken[k] = 1;
       TrackState& track = tracks[active[a]];
-      const double dt = (frame.frame - track.last_frame) / options.frame_rate_hz;
-      track.velocity = (centers[k] - track.last_center_in_world) / dt;
-      track.has_velocity = true;
-      track.last_center_in_world = centers[k];
+      // Kalman update with the detected centre (H = [I 0]).
+      const Matrix6d& p = predicted_covariance[a];
+      const Eigen::Matrix3d s = p.topLeftCorner<3, 3>() + noise[k];
+      const Eigen::Matrix<double, 6, 3> gain = p.leftCols<3>() * s.inverse();
+      track.state = predicted[a] + gain * (centers[k] - predicted[a].head<3>());
+      const Matrix6d covariance = p - gain * p.topRows<3>();
+      track.covariance = 0.5 * (covariance + covariance.transpose());
       track.last_frame = frame.frame;
       ObjectLabel label = frame.detections[k];
       label.frame = frame.frame;
@@ -188,7 +237,11 @@ std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& fram
     for (int k = 0; k < num; ++k) {
       if (taken[k]) continue;
       TrackState track;
-      track.last_center_in_world = centers[k];
+      track.state.head<3>() = centers[k];
+      track.covariance.setZero();
+      track.covariance.topLeftCorner<3, 3>() = noise[k];
+      const double s_v = options.max_speed / 2.0;
+      track.covariance.bottomRightCorner<3, 3>() = s_v * s_v * Eigen::Matrix3d::Identity();
       track.last_frame = frame.frame;
       ObjectLabel label = frame.detections[k];
       label.frame = frame.frame;

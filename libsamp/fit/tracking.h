@@ -1,8 +1,10 @@
 // Tracking-by-detection in 3D (see docs/sequence_format.md, "Tracking"):
-// detections are placed in the world frame with the ego poses, tracks predict
-// their position with a constant velocity, detections are assigned to tracks
-// by the Hungarian method on the distance to the prediction within a gate,
-// unmatched detections start new tracks, tracks end after max_misses
+// detections are placed in the world frame with the ego poses; every track
+// runs a constant-velocity Kalman filter on its box centre with the
+// detector's distance-dependent noise (3DOP-like: large along the viewing
+// ray far away); detections are assigned to tracks by the Hungarian method on
+// the squared Mahalanobis distance to the prediction within a chi-square gate;
+// unmatched detections start new tracks; tracks end after max_misses
 // consecutive frames without a detection. Deterministic.
 #pragma once
 
@@ -15,14 +17,21 @@
 namespace samp {
 
 struct TrackerOptions {
-  // Gate of an established track (velocity known): maximum distance, m, from
-  // the predicted to the detected box centre in the world, per frame elapsed
-  // the gate grows by gate_growth (uncertainty of the prediction).
-  double gate_distance = 2.0;
-  double gate_growth = 0.5;
-  // A track with one detection has no velocity: its gate is
-  // gate_distance + max_speed * dt (m/s, urban traffic).
+  // Detector noise: standard deviations (m) of a detected box centre in the
+  // camera of its frame, d = the centre's horizontal distance (m): along the
+  // horizontal viewing ray depth_sigma_a + depth_sigma_b d^2 (stereo depth
+  // error grows with d^2), across it lateral_sigma_a + lateral_sigma_b d,
+  // vertically height_sigma. Defaults: the 3DOP-like model of docs/synthetic.md.
+  double depth_sigma_a = 0.1, depth_sigma_b = 0.001;
+  double lateral_sigma_a = 0.05, lateral_sigma_b = 0.005;
+  double height_sigma = 0.05;
+  // Constant-velocity model: white acceleration noise (m/s^2) and, for a new
+  // track, a zero velocity with standard deviation max_speed / 2 (m/s) per axis.
+  double acceleration_sigma = 3.0;
   double max_speed = 20.0;
+  // Gate: squared Mahalanobis distance of a detection to a track's predicted
+  // centre (3 degrees of freedom); 16.27 keeps 99.9 % of true matches.
+  double gate_chi2 = 16.27;
   // A track ends after this many consecutive frames without a detection.
   int max_misses = 2;
   // Tracks with fewer detections are dropped and reported in the summary.

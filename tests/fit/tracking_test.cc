@@ -81,6 +81,61 @@ TEST(TrackingTest, TwoCrossingCarsWithAMissAndAFalsePositive) {
   EXPECT_EQ(again[1].detections.size(), tracks[1].detections.size());
 }
 
+// Far cars seen by a 3DOP-like detector (depth noise 0.1 + 0.001 d^2 m along
+// the viewing ray: ~1-2 m at 30-45 m) with misses: each car must come out as
+// one track, without switches. A gate on the raw distance with a velocity from
+// the last two detections broke such tracks into pieces of 2-3 frames.
+TEST(TrackingTest, FarNoisyCarsStayOneTrackEach) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  struct Car {
+    Eigen::Vector3d start, velocity;  // world, m and m/s
+  };
+  // Ego drives +z at 10 m/s; cars ahead: one standing, one following, one oncoming, one crossing.
+  const Car cars[] = {{{-4.0, 0.9, 40.0}, {0.0, 0.0, 0.0}},
+                      {{3.5, 0.9, 35.0}, {0.0, 0.0, 8.0}},
+                      {{-1.0, 0.9, 55.0}, {0.0, 0.0, -8.0}},
+                      {{-12.0, 0.9, 48.0}, {6.0, 0.0, 0.0}}};
+  const int num_cars = 4;
+  std::vector<FrameDetections> frames;
+  int num_detected = 0;
+  for (int t = 0; t < 21; ++t) {
+    FrameDetections fd;
+    fd.frame = t;
+    fd.world_from_camera = Eigen::Isometry3d::Identity();
+    fd.world_from_camera.translation() = Eigen::Vector3d(0, 0, 1.0 * t);
+    for (int c = 0; c < num_cars; ++c) {
+      if (uniform(rng) < 0.05) continue;  // missed
+      const Eigen::Vector3d truth = cars[c].start + cars[c].velocity * (0.1 * t);
+      const Eigen::Vector3d in_camera = fd.world_from_camera.inverse() * truth;
+      Eigen::Vector3d ray(in_camera.x(), 0, in_camera.z());
+      const double d = ray.norm();
+      ray /= d;
+      const Eigen::Vector3d lateral(ray.z(), 0, -ray.x());
+      const Eigen::Vector3d noisy = truth + ray * (0.1 + 0.001 * d * d) * unit(rng) +
+                                    lateral * (0.05 + 0.005 * d) * unit(rng) +
+                                    Eigen::Vector3d(0, 0.05 * unit(rng), 0);
+      ObjectLabel label = DetectionAt(Eigen::Vector3d::Zero(), t, double(c));
+      label.position = fd.world_from_camera.inverse() * noisy + Eigen::Vector3d(0, 0.75, 0);
+      fd.detections.push_back(label);
+      ++num_detected;
+    }
+    frames.push_back(fd);
+  }
+  TrackingSummary summary;
+  const std::vector<LinkedTrack> tracks = LinkDetections(frames, TrackerOptions(), &summary);
+  ASSERT_EQ(int(tracks.size()), num_cars) << summary.BriefReport();
+  EXPECT_EQ(summary.num_short_tracks, 0) << summary.BriefReport();
+  int linked = 0;
+  for (const LinkedTrack& track : tracks) {
+    const double marker = track.detections.front().alpha;
+    for (const ObjectLabel& d : track.detections) EXPECT_EQ(d.alpha, marker) << "switch in frame " << d.frame;
+    linked += int(track.detections.size());
+  }
+  EXPECT_EQ(linked, num_detected);
+}
+
 TEST(TrackingTest, TrackEndsAfterTooManyMisses) {
   std::vector<FrameDetections> frames;
   for (int t = 0; t < 10; ++t) {
