@@ -25,7 +25,7 @@
 #include "libsamp/fit/fit_output.h"
 #include "libsamp/fit/kitti_io.h"
 #include "libsamp/fit/sequence.h"
-#include "libsamp/fit/shape_lookup.h"
+#include "libsamp/model/shape_lookup.h"
 #include "libsamp/model/shape_model.h"
 #include "libsamp/fit/stereo.h"
 #include "libsamp/scan/mesh_io.h"

@@ -13,7 +13,7 @@
 
 #include "libsamp/core/mesh.h"
 #include "libsamp/fit/motion_model.h"
-#include "libsamp/fit/shape_lookup.h"
+#include "libsamp/model/shape_lookup.h"
 #include "libsamp/fit/track.h"
 
 namespace samp {

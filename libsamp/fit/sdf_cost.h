@@ -26,7 +26,7 @@
 #include <utility>
 #include <vector>
 
-#include "libsamp/fit/shape_lookup.h"
+#include "libsamp/model/shape_lookup.h"
 
 namespace samp {
 

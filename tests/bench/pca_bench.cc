@@ -1,5 +1,5 @@
 // Benchmarks of the model layer: PCA of N synthetic SDF-sized grids (R = 20)
-// and the shape model's trilinear lookups. Figures: docs/benchmarks.md.
+// and the trilinear lookups of ShapeLookup. Figures: docs/benchmarks.md.
 //
 //   pca_bench --benchmark_filter=Pca             # PCA, N = 200 / 1000
 //   pca_bench --benchmark_filter=Gram            # its Gram product, per kernel
@@ -14,6 +14,7 @@
 #include "libsamp/core/grid_spec.h"
 #include "libsamp/model/gram.h"
 #include "libsamp/model/pca.h"
+#include "libsamp/model/shape_lookup.h"
 #include "libsamp/model/shape_model.h"
 
 namespace samp {
@@ -130,32 +131,35 @@ std::vector<Eigen::Vector3d> CarPoints(int n) {
   return points;
 }
 
-// Args: R; with gradients d/dpoint and d/dz.
+// Args: R; with gradients d/dpoint and d/dz, from z (8 (R + 1) multiply-adds per point).
 void BM_Evaluate(benchmark::State& state) {
-  const ShapeModel model = BenchmarkModel(int(state.range(0)));
+  const ShapeLookup lookup(BenchmarkModel(int(state.range(0))));
   const std::vector<Eigen::Vector3d> points = CarPoints(5000);
-  const Eigen::VectorXd z = Eigen::VectorXd::Constant(model.NumComponents(), 0.3);
-  std::vector<double> d_z(model.NumComponents());
+  const Eigen::VectorXd z = Eigen::VectorXd::Constant(lookup.num_components(), 0.3);
+  std::vector<double> d_z(lookup.num_components());
   double d_point[3];
   for (auto _ : state) {
     double sum = 0.0;
-    for (const auto& p : points) sum += model.Evaluate(z.data(), p.data(), d_point, d_z.data());
+    for (const auto& p : points) sum += lookup.Evaluate(z.data(), p.data(), d_point, d_z.data());
     benchmark::DoNotOptimize(sum);
   }
   state.SetItemsProcessed(state.iterations() * int64_t(points.size()));
 }
 BENCHMARK(BM_Evaluate)->ArgName("R")->Arg(5)->Arg(20);
 
-// Lookups in a dense shape (value and d/dpoint only), plus the cost of Shape(z).
+// The fitter's path: the dense grid of z (recomputed every iteration: the code
+// alternates) and lookups in it with both gradients.
 void BM_EvaluateDense(benchmark::State& state) {
-  const ShapeModel model = BenchmarkModel(int(state.range(0)));
+  const ShapeLookup lookup(BenchmarkModel(int(state.range(0))));
   const std::vector<Eigen::Vector3d> points = CarPoints(5000);
-  const Eigen::VectorXd z = Eigen::VectorXd::Constant(model.NumComponents(), 0.3);
+  Eigen::VectorXd z = Eigen::VectorXd::Constant(lookup.num_components(), 0.3);
+  std::vector<double> d_z(lookup.num_components());
   double d_point[3];
   for (auto _ : state) {
-    const Eigen::VectorXf shape = model.Shape(z);
+    z[0] = -z[0];
+    const double* dense = lookup.DenseCached(z.data());
     double sum = 0.0;
-    for (const auto& p : points) sum += model.EvaluateDense(shape.data(), p.data(), d_point);
+    for (const auto& p : points) sum += lookup.EvaluateDense(dense, p.data(), d_point, d_z.data());
     benchmark::DoNotOptimize(sum);
   }
   state.SetItemsProcessed(state.iterations() * int64_t(points.size()));

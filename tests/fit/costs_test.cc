@@ -12,7 +12,7 @@
 #include "libsamp/fit/ground_cost.h"
 #include "libsamp/fit/motion_cost.h"
 #include "libsamp/fit/sdf_cost.h"
-#include "libsamp/fit/shape_lookup.h"
+#include "libsamp/model/shape_lookup.h"
 #include "libsamp/fit/shape_prior_cost.h"
 #include "tests/fit/fit_test_util.h"
 
@@ -70,80 +70,6 @@ void ExpectJacobiansMatch(const ceres::CostFunction& cost, std::vector<double*> 
     }
   }
   EXPECT_EQ(bad, 0) << what << ": worst error " << worst << "\n" << log.str();
-}
-
-TEST(ShapeLookup, MatchesDirectTrilinearInterpolation) {
-  const ShapeLookup& lookup = Lookup();
-  const ShapeModel& model = Model();
-  std::mt19937 rng(1);
-  std::normal_distribution<double> n(0.0, 1.0);
-  Eigen::VectorXd z(5);
-  for (int r = 0; r < 5; ++r) z[r] = n(rng) * std::sqrt(model.eigenvalues[r]);
-  const Eigen::VectorXf phi = model.mean + model.components * z.cast<float>();
-  // At grid samples the lookup returns the sample.
-  for (auto ijk : {Eigen::Vector3i(3, 4, 5), Eigen::Vector3i(30, 14, 14), Eigen::Vector3i(59, 27, 27)}) {
-    const Eigen::Vector3d p = model.grid.Position(ijk.x(), ijk.y(), ijk.z());
-    EXPECT_NEAR(lookup.Evaluate(z, p), phi[model.grid.Index(ijk.x(), ijk.y(), ijk.z())], 1e-5);
-  }
-  // Midpoint of a cell = mean of its 8 corners.
-  const Eigen::Vector3d mid = model.grid.Position(10, 10, 10) + Eigen::Vector3d::Constant(0.05);
-  double mean = 0;
-  for (int c = 0; c < 8; ++c) mean += phi[model.grid.Index(10 + (c & 1), 10 + ((c >> 1) & 1), 10 + (c >> 2))];
-  EXPECT_NEAR(lookup.Evaluate(z, mid), mean / 8, 1e-5);
-  // Dense agrees with the model.
-  const std::vector<float> dense = lookup.Dense(z);
-  for (int64_t v = 0; v < model.grid.NumVoxels(); v += 997) EXPECT_NEAR(dense[v], phi[v], 1e-5);
-}
-
-TEST(ShapeLookup, OutsideGridPointsBack) {
-  const ShapeLookup& lookup = Lookup();
-  const Eigen::VectorXd z = Eigen::VectorXd::Zero(5);
-  const Eigen::Vector3d corner = lookup.grid().MaxCorner();
-  const Eigen::Vector3d inside_point = corner - Eigen::Vector3d(0.0, 0.5, 0.5);
-  const Eigen::Vector3d outside_point = inside_point + Eigen::Vector3d(2.0, 0, 0);
-  Eigen::Vector3d g;
-  Eigen::VectorXd gz;
-  const double border = lookup.Evaluate(z, inside_point);
-  const double value = lookup.Evaluate(z, outside_point, &g, &gz);
-  EXPECT_NEAR(value, border + 2.0, 1e-9);
-  EXPECT_NEAR(g.x(), 1.0, 1e-12);  // -gradient points back into the grid
-  EXPECT_GT(g.norm(), 0.5);
-  // Far outside along a diagonal: value grows with the distance to the box.
-  const Eigen::Vector3d far = corner + Eigen::Vector3d(3.0, 4.0, 0.0);
-  const double far_value = lookup.Evaluate(z, far, &g, &gz);
-  EXPECT_NEAR(far_value, lookup.Evaluate(z, corner) + 5.0, 1e-9);
-  EXPECT_NEAR(g.x(), 0.6, 1e-9);
-  EXPECT_NEAR(g.y(), 0.8, 1e-9);
-  // Non-finite point: NaN, no crash.
-  EXPECT_TRUE(std::isnan(lookup.Evaluate(z, Eigen::Vector3d(NAN, 0, 0))));
-}
-
-TEST(ShapeLookup, GradientsMatchCentralDifferences) {
-  const ShapeLookup& lookup = Lookup();
-  std::mt19937 rng(2);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (int trial = 0; trial < 200; ++trial) {
-    Eigen::VectorXd z(5);
-    for (int r = 0; r < 5; ++r) z[r] = u(rng) * lookup.sigmas()[r];
-    // Half the points outside the grid box.
-    const Eigen::Vector3d p(u(rng) * 4.5, -0.9 + u(rng) * 2.5, u(rng) * 2.5);
-    Eigen::Vector3d g;
-    Eigen::VectorXd gz;
-    lookup.Evaluate(z, p, &g, &gz);
-    const double h = 1e-7;
-    for (int a = 0; a < 3; ++a) {
-      Eigen::Vector3d d = Eigen::Vector3d::Zero();
-      d[a] = h;
-      const double num = (lookup.Evaluate(z, p + d) - lookup.Evaluate(z, p - d)) / (2 * h);
-      EXPECT_NEAR(g[a], num, 1e-5) << "point " << p.transpose() << " axis " << a;
-    }
-    for (int r = 0; r < 5; ++r) {
-      Eigen::VectorXd d = Eigen::VectorXd::Zero(5);
-      d[r] = h;
-      const double num = (lookup.Evaluate(z + d, p) - lookup.Evaluate(z - d, p)) / (2 * h);
-      EXPECT_NEAR(gz[r], num, 1e-5);
-    }
-  }
 }
 
 TEST(SdfCost, HuberPsi) {

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "libsamp/core/error.h"
+#include "libsamp/model/shape_lookup.h"
 #include "libsamp/sdf/vdb_io.h"
 
 namespace samp {
@@ -96,26 +97,48 @@ std::vector<Eigen::Vector3d> RandomPoints(const GridSpec& grid, double margin, i
   return points;
 }
 
-TEST(ShapeModel, EvaluateMatchesBruteForceTrilinear) {
+TEST(ShapeLookup, EvaluateMatchesBruteForceTrilinear) {
   const ShapeModel model = RandomModel(3, 1);
+  const ShapeLookup lookup(model);
   const Eigen::VectorXd z = Eigen::Vector3d(0.7, -1.3, 0.4);
   const Eigen::VectorXf shape = model.Shape(z);
   ASSERT_EQ(shape.size(), model.NumVoxels());
+  const double* dense = lookup.DenseCached(z.data());
   for (const auto& p : RandomPoints(model.grid, 0.4, 400, 2)) {
-    EXPECT_NEAR(model.Evaluate(z, p), BruteForce(model.grid, shape, p), 1e-5) << p.transpose();
-    EXPECT_NEAR(model.EvaluateDense(shape.data(), p.data(), nullptr), model.Evaluate(z, p), 1e-5);
+    EXPECT_NEAR(lookup.Evaluate(z, p), BruteForce(model.grid, shape, p), 1e-5) << p.transpose();
+    EXPECT_NEAR(lookup.EvaluateDense(dense, p.data(), nullptr, nullptr), lookup.Evaluate(z, p), 1e-12);
   }
   // At the samples the lookup returns the sample.
   for (int k : {0, 2, 4})
     for (int j : {0, 5})
       for (int i : {0, 3, 6}) {
-        EXPECT_NEAR(model.Evaluate(z, model.grid.Position(i, j, k)),
+        EXPECT_NEAR(lookup.Evaluate(z, model.grid.Position(i, j, k)),
                     shape[model.grid.Index(i, j, k)], 1e-5);
       }
+  // The dense grids agree with the model's.
+  const std::vector<float> dense_float = lookup.Dense(z);
+  ASSERT_EQ(int64_t(dense_float.size()), model.NumVoxels());
+  for (int64_t v = 0; v < model.NumVoxels(); ++v) {
+    EXPECT_NEAR(dense_float[size_t(v)], shape[v], 1e-5);
+    EXPECT_NEAR(dense[v], shape[v], 1e-5);
+  }
 }
 
-TEST(ShapeModel, GradientsMatchFiniteDifferencesInsideAndOutside) {
+TEST(ShapeLookup, DenseCacheFollowsTheCodeAndTheLookup) {
+  const ShapeModel model_a = RandomModel(3, 11), model_b = RandomModel(3, 12);
+  const ShapeLookup a(model_a), b(model_b);
+  const Eigen::VectorXd z1 = Eigen::Vector3d(0.5, 0.1, -0.2), z2 = Eigen::Vector3d(-0.4, 0.3, 0.9);
+  const Eigen::Vector3d p(0.02, 0.07, -0.05);
+  for (const auto& [lookup, z] : {std::make_pair(&a, z1), std::make_pair(&a, z2), std::make_pair(&b, z2),
+                                  std::make_pair(&a, z2), std::make_pair(&b, z1)}) {
+    const double* dense = lookup->DenseCached(z.data());
+    EXPECT_NEAR(lookup->EvaluateDense(dense, p.data(), nullptr, nullptr), lookup->Evaluate(z, p), 1e-12);
+  }
+}
+
+TEST(ShapeLookup, GradientsMatchFiniteDifferencesInsideAndOutside) {
   const ShapeModel model = RandomModel(3, 3);
+  const ShapeLookup lookup(model);
   const Eigen::VectorXd z = Eigen::Vector3d(-0.2, 0.9, 1.1);
   const double step = 1e-6;
   int num_outside = 0;
@@ -126,13 +149,13 @@ TEST(ShapeModel, GradientsMatchFiniteDifferencesInsideAndOutside) {
     num_outside += outside;
     Eigen::Vector3d d_point;
     Eigen::VectorXd d_z;
-    const double value = model.Evaluate(z, p, &d_point, &d_z);
-    EXPECT_EQ(value, model.Evaluate(z, p));
+    const double value = lookup.Evaluate(z, p, &d_point, &d_z);
+    EXPECT_EQ(value, lookup.Evaluate(z, p));
     for (int a = 0; a < 3; ++a) {
       Eigen::Vector3d plus = p, minus = p;
       plus[a] += step;
       minus[a] -= step;
-      const double numeric = (model.Evaluate(z, plus) - model.Evaluate(z, minus)) / (2 * step);
+      const double numeric = (lookup.Evaluate(z, plus) - lookup.Evaluate(z, minus)) / (2 * step);
       EXPECT_NEAR(d_point[a], numeric, 1e-6 * (1.0 + std::abs(numeric)))
           << "axis " << a << " at " << p.transpose() << (outside ? " (outside)" : "");
     }
@@ -141,28 +164,28 @@ TEST(ShapeModel, GradientsMatchFiniteDifferencesInsideAndOutside) {
       Eigen::VectorXd plus = z, minus = z;
       plus[r] += 1e-3;
       minus[r] -= 1e-3;
-      const double numeric = (model.Evaluate(plus, p) - model.Evaluate(minus, p)) / 2e-3;
+      const double numeric = (lookup.Evaluate(plus, p) - lookup.Evaluate(minus, p)) / 2e-3;
       EXPECT_NEAR(d_z[r], numeric, 1e-6) << "component " << r;
     }
-    // The raw-pointer paths agree.
-    double d_point_raw[3], d_z_raw[3], d_z_code[3], d_point_dense[3];
-    EXPECT_EQ(model.Evaluate(z.data(), p.data(), d_point_raw, d_z_raw), value);
-    model.CodeGradient(p.data(), d_z_code);
-    const Eigen::VectorXf shape = model.Shape(z);
-    EXPECT_NEAR(model.EvaluateDense(shape.data(), p.data(), d_point_dense), value, 1e-5);
+    // The raw-pointer and dense paths agree.
+    double d_point_raw[3], d_z_raw[3], d_point_dense[3], d_z_dense[3];
+    EXPECT_EQ(lookup.Evaluate(z.data(), p.data(), d_point_raw, d_z_raw), value);
+    const double* dense = lookup.DenseCached(z.data());
+    EXPECT_NEAR(lookup.EvaluateDense(dense, p.data(), d_point_dense, d_z_dense), value, 1e-12);
     for (int i = 0; i < 3; ++i) {
       EXPECT_EQ(d_point_raw[i], d_point[i]);
       EXPECT_EQ(d_z_raw[i], d_z[i]);
-      EXPECT_NEAR(d_z_code[i], d_z[i], 1e-12);
-      EXPECT_NEAR(d_point_dense[i], d_point[i], 1e-4);
+      EXPECT_NEAR(d_z_dense[i], d_z[i], 1e-12);
+      EXPECT_NEAR(d_point_dense[i], d_point[i], 1e-9);
     }
   }
   EXPECT_GT(num_outside, 100);
   EXPECT_LT(num_outside, 490);
 }
 
-TEST(ShapeModel, FarOutsideGradientPointsAwayFromTheGrid) {
+TEST(ShapeLookup, FarOutsideGradientPointsAwayFromTheGrid) {
   const ShapeModel model = RandomModel(2, 5);
+  const ShapeLookup lookup(model);
   const Eigen::VectorXd z = Eigen::Vector2d(0.3, -0.5);
   const Eigen::Vector3d centre = 0.5 * (model.grid.MinCorner() + model.grid.MaxCorner());
   for (const Eigen::Vector3d offset :
@@ -170,24 +193,46 @@ TEST(ShapeModel, FarOutsideGradientPointsAwayFromTheGrid) {
         Eigen::Vector3d(-3, 2, 1), Eigen::Vector3d(2, 2, -2)}) {
     const Eigen::Vector3d p = centre + offset;
     Eigen::Vector3d gradient;
-    const double value = model.Evaluate(z, p, &gradient);
+    const double value = lookup.Evaluate(z, p, &gradient);
     EXPECT_GT(gradient.norm(), 0.99);
     EXPECT_GT(gradient.dot(p - centre), 0.0) << offset.transpose();
     // Moving away increases the value by about the distance moved.
-    EXPECT_NEAR(model.Evaluate(z, p + 0.1 * offset.normalized()) - value, 0.1, 0.05);
+    EXPECT_NEAR(lookup.Evaluate(z, p + 0.1 * offset.normalized()) - value, 0.1, 0.05);
   }
+  // Straight out of a face: value = the face value plus the distance, gradient = the face normal.
+  const Eigen::Vector3d face = model.grid.MaxCorner() - Eigen::Vector3d(0.0, 0.13, 0.17);
+  Eigen::Vector3d gradient;
+  EXPECT_NEAR(lookup.Evaluate(z, face + Eigen::Vector3d(2.0, 0, 0), &gradient), lookup.Evaluate(z, face) + 2.0,
+              1e-9);
+  EXPECT_NEAR(gradient.x(), 1.0, 1e-12);
+  // Off a corner along a diagonal: distance 5, gradient (0.6, 0.8, 0).
+  const Eigen::Vector3d corner = model.grid.MaxCorner();
+  EXPECT_NEAR(lookup.Evaluate(z, corner + Eigen::Vector3d(3, 4, 0), &gradient), lookup.Evaluate(z, corner) + 5.0,
+              1e-9);
+  EXPECT_NEAR(gradient.x(), 0.6, 1e-9);
+  EXPECT_NEAR(gradient.y(), 0.8, 1e-9);
 }
 
-TEST(ShapeModel, NonFinitePointGivesNaN) {
+TEST(ShapeLookup, NonFinitePointGivesNaN) {
   const ShapeModel model = RandomModel(2, 6);
+  const ShapeLookup lookup(model);
   const Eigen::VectorXd z = Eigen::Vector2d(0.0, 0.0);
   Eigen::Vector3d d_point;
   Eigen::VectorXd d_z;
-  EXPECT_TRUE(std::isnan(model.Evaluate(z, Eigen::Vector3d(NAN, 0, 0), &d_point, &d_z)));
+  EXPECT_TRUE(std::isnan(lookup.Evaluate(z, Eigen::Vector3d(NAN, 0, 0), &d_point, &d_z)));
   EXPECT_TRUE(std::isnan(d_point[0]));
   EXPECT_TRUE(std::isnan(d_z[1]));
-  EXPECT_TRUE(std::isnan(model.Evaluate(z, Eigen::Vector3d(0, INFINITY, 0))));
-  EXPECT_THROW(model.Evaluate(Eigen::Vector3d(1, 2, 3), Eigen::Vector3d::Zero()), Error);
+  EXPECT_TRUE(std::isnan(lookup.Evaluate(z, Eigen::Vector3d(0, INFINITY, 0))));
+  EXPECT_THROW(lookup.Evaluate(Eigen::Vector3d(1, 2, 3), Eigen::Vector3d::Zero()), Error);
+}
+
+TEST(ShapeLookup, RejectsInconsistentModels) {
+  ShapeModel model = RandomModel(2, 9);
+  model.eigenvalues[1] = 0.0;
+  EXPECT_THROW(ShapeLookup{model}, Error);
+  model = RandomModel(2, 9);
+  model.mean.resize(model.mean.size() - 1);
+  EXPECT_THROW(ShapeLookup{model}, Error);
 }
 
 TEST(ShapeModel, FileRoundTrip) {
@@ -209,8 +254,9 @@ TEST(ShapeModel, FileRoundTrip) {
   EXPECT_EQ(nlohmann::json::parse(loaded.options_json), nlohmann::json::parse(model.options_json));
   // Lookups agree after the round trip.
   const Eigen::VectorXd z = Eigen::Vector3d(0.1, 0.2, -0.3);
+  const ShapeLookup loaded_lookup(loaded), lookup(model);
   for (const auto& p : RandomPoints(model.grid, 0.2, 50, 8)) {
-    EXPECT_EQ(loaded.Evaluate(z, p), model.Evaluate(z, p));
+    EXPECT_EQ(loaded_lookup.Evaluate(z, p), lookup.Evaluate(z, p));
   }
   // Overwriting an existing file works and leaves no temporary behind.
   model.Save(path);

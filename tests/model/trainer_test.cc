@@ -9,6 +9,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/ply_io.h"
+#include "libsamp/model/shape_lookup.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/sdf/vdb_io.h"
 
@@ -130,8 +131,9 @@ TEST_F(TrainerTest, TrainsFromAFolderAndSkipsBadFiles) {
   EXPECT_EQ(stored["pca"]["num_components"], 3);
   // The mean shape is a car-sized blob around the origin's bottom centre.
   const Eigen::VectorXd zero = Eigen::VectorXd::Zero(3);
-  EXPECT_LT(model.Evaluate(zero, Eigen::Vector3d(0, -0.7, 0)), -0.3);
-  EXPECT_GT(model.Evaluate(zero, Eigen::Vector3d(2.8, -2.0, 1.2)), 0.3);
+  const ShapeLookup lookup(model);
+  EXPECT_LT(lookup.Evaluate(zero, Eigen::Vector3d(0, -0.7, 0)), -0.3);
+  EXPECT_GT(lookup.Evaluate(zero, Eigen::Vector3d(2.8, -2.0, 1.2)), 0.3);
 
   // One SDF file per used model, with its provenance.
   int num_sdf_files = 0;

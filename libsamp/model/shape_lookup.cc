@@ -1,4 +1,4 @@
-#include "libsamp/fit/shape_lookup.h"
+#include "libsamp/model/shape_lookup.h"
 
 #include <algorithm>
 #include <atomic>
