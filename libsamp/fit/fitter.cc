@@ -145,6 +145,8 @@ bool FitOptions::Check() const {
       << "FitOptions.standing_speed must be >= 0";
   SAMP_CHECK(max_motion_off_axis > 0.0 && max_motion_off_axis <= M_PI / 2)
       << "FitOptions.max_motion_off_axis must be in (0, pi/2]";
+  SAMP_CHECK(std::isfinite(min_speed_significance) && min_speed_significance >= 0.0)
+      << "FitOptions.min_speed_significance must be >= 0";
   SAMP_CHECK(std::isfinite(straight_yaw_rate) && straight_yaw_rate >= 0.0)
       << "FitOptions.straight_yaw_rate must be >= 0";
   motion_noise.Check();
@@ -184,21 +186,57 @@ InitialState InitializeTrack(const Track& track, const FitOptions& options) {
     positions[k] = DetectionOnGround(track.frames[k]);
     detection_yaws[k] = DetectionYaw(track.frames[k]);
   }
-  // Median over all pairs of detections (i < j) of the along-road
-  // displacement over the time between them: successive pairs alone are
-  // dominated by detection noise at 10 Hz (0.3 m of noise is 3 m/s), longer
-  // baselines are not; for a constant velocity every pair measures v.
-  std::vector<double> speeds;
-  for (int i = 0; i < num_frames; ++i) {
-    for (int j = i + 1; j < num_frames; ++j) {
-      const double dt = track.frames[j].time - track.frames[i].time;
-      Eigen::Vector3d d = positions[j] - positions[i];
-      const Eigen::Vector3d n = track.frames[i].ground_plane_in_world.head<3>();
-      d -= n.dot(d) * n;  // along the road
-      speeds.push_back(d.norm() / dt);
+  // Velocity on the road by Theil-Sen: per world axis the median over all
+  // pairs of detections (i < j) of (p_j - p_i) / (t_j - t_i). Unlike the
+  // median of pairwise speeds (norms, biased upwards by noise) it is ~0 for a
+  // standing car, and one flipped or displaced detection does not move it.
+  const double t_mean = [&] {
+    double sum = 0.0;
+    for (const TrackFrame& f : track.frames) sum += f.time;
+    return sum / std::max(num_frames, 1);
+  }();
+  Eigen::Vector3d velocity = Eigen::Vector3d::Zero();
+  double velocity_sigma = 0.0;  // of the speed, m/s
+  if (num_frames >= 2) {
+    std::vector<double> slopes[3], offsets[3];
+    for (int i = 0; i < num_frames; ++i) {
+      for (int j = i + 1; j < num_frames; ++j) {
+        const double dt = track.frames[j].time - track.frames[i].time;
+        for (int a = 0; a < 3; ++a) slopes[a].push_back((positions[j][a] - positions[i][a]) / dt);
+      }
     }
+    for (int a = 0; a < 3; ++a) velocity[a] = Median(slopes[a]);
+    const Eigen::Vector3d n = track.frames.front().ground_plane_in_world.head<3>();
+    velocity -= n.dot(velocity) * n;  // along the road
+    // Noise of the positions about the fitted line along the velocity,
+    // propagated to the slope as for least squares.
+    std::vector<double> residuals;
+    for (int a = 0; a < 3; ++a) {
+      for (int k = 0; k < num_frames; ++k) offsets[a].push_back(positions[k][a] - velocity[a] * track.frames[k].time);
+    }
+    Eigen::Vector3d offset;
+    for (int a = 0; a < 3; ++a) offset[a] = Median(offsets[a]);
+    double spread = 0.0;
+    for (int k = 0; k < num_frames; ++k) {
+      // Along the velocity: the noise that could fake this speed (the
+      // detections' scatter is anisotropic, mostly along the line of sight).
+      const Eigen::Vector3d r = positions[k] - offset - velocity * track.frames[k].time;
+      const double speed_so_far = velocity.norm();
+      residuals.push_back(speed_so_far > 0.0 ? std::abs(r.dot(velocity) / speed_so_far)
+                                             : (r - n.dot(r) * n).norm() / std::sqrt(2.0));
+      spread += (track.frames[k].time - t_mean) * (track.frames[k].time - t_mean);
+    }
+    // The larger of a robust (1.4826 MAD) and the plain RMS estimate: with ~20
+    // frames either alone is often low by a third, and too low a noise makes
+    // scatter look like motion (erring the other way only delays "moving"
+    // for slow, far cars).
+    double sum_sq = 0.0;
+    for (double r : residuals) sum_sq += r * r;
+    const double position_sigma =
+        std::max(1.4826 * Median(residuals), std::sqrt(sum_sq / std::max(num_frames - 2, 1)));
+    velocity_sigma = position_sigma / std::sqrt(std::max(spread, 1e-12));
   }
-  const double speed = Median(speeds);
+  const double speed = velocity.norm();
   // The detections' orientation: axis by the doubled-angle mean, direction by
   // the majority of detections.
   double detected_yaw;
@@ -213,14 +251,17 @@ InitialState InitializeTrack(const Track& track, const FitOptions& options) {
     for (double y : detection_yaws) agree += std::abs(WrapAngle(y - detected_yaw)) <= M_PI / 2 ? 1 : -1;
     if (agree < 0) detected_yaw = WrapAngle(detected_yaw + M_PI);
   }
-  init.standing = num_frames < 2 || speed < options.standing_speed;
+  // Standing when slow, or when the speed is within the noise of its estimate
+  // (far cars: at 40 m the detections scatter by metres along the line of
+  // sight, and the direction of that scatter would give a standing car a
+  // random heading).
+  init.standing = num_frames < 2 || speed < options.standing_speed ||
+                  speed < options.min_speed_significance * velocity_sigma;
   double reference = detected_yaw;
   if (!init.standing) {
-    // A car drives along its length axis: a displacement far off the detected
-    // axis is detection noise on a standing car (far cars, where the noise of
-    // the positions exceeds standing_speed), not motion, and its direction
-    // would give the car a random heading.
-    const double motion_yaw = YawOfDirection(positions.back() - positions.front());
+    // A car drives along its length axis: a velocity far off the detected
+    // axis is detection noise on a standing car, not motion.
+    const double motion_yaw = YawOfDirection(velocity);
     const double off_axis = std::abs(WrapAngle(motion_yaw - detected_yaw));
     if (std::min(off_axis, M_PI - off_axis) > options.max_motion_off_axis) {
       init.standing = true;

@@ -49,6 +49,10 @@ struct FitOptions {
   // Initialisation: a track whose displacement points more than this far off the
   // detections' length axis (radians, either direction) is taken as standing.
   double max_motion_off_axis = 0.5;
+  // Initialisation: a track is taken as moving only when its speed (Theil-Sen
+  // fit of the detections' positions over time) exceeds this many standard
+  // deviations of the estimate (from the scatter of the positions about the fit).
+  double min_speed_significance = 3.0;
   MotionNoise motion_noise;
   // Ceres: iterations per solve, tolerances, linear solver
   // ("sparse_normal_cholesky", "dense_schur", "iterative_schur", "dense_qr").

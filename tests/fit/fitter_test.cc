@@ -95,6 +95,46 @@ TEST(Fitter, InitializationIgnoresOffAxisDrift) {
   EXPECT_THROW(bad.Check(), Error);
 }
 
+TEST(Fitter, InitializationKeepsFarStandingCarsStanding) {
+  // A standing car ~40 m away whose length axis is along the line of sight:
+  // its detections scatter by 1.5 m (s.d.) along that axis, so their
+  // displacements point along the car either way. Taking the noise as motion
+  // would give the car the heading of the noise, flipped in half the cases.
+  const ShapeLookup lookup(Model());
+  std::mt19937 rng(17);
+  std::normal_distribution<double> noise(0.0, 1.5);
+  int num_standing = 0, num_right = 0;
+  const int num_trials = 40;
+  for (int trial = 0; trial < num_trials; ++trial) {
+    Synthetic st = MakeTrack(lookup, 21, 0.0, 0.0, 50, 100 + trial);
+    const Eigen::Vector3d along_in_world = Heading(0.4);
+    for (TrackFrame& f : st.track.frames) {
+      f.detection.position += f.world_from_camera.linear().transpose() * (noise(rng) * along_in_world);
+    }
+    const InitialState init = InitializeTrack(st.track, FitOptions());
+    num_standing += init.standing;
+    num_right += std::abs(WrapAngle(init.poses[0][3] - 0.4)) < 0.2;
+  }
+  EXPECT_EQ(num_standing, num_trials);
+  EXPECT_EQ(num_right, num_trials);
+  // The same noise on a car driving at 5 m/s along its axis: moving, right way round.
+  int num_moving = 0;
+  for (int trial = 0; trial < num_trials; ++trial) {
+    Synthetic mv = MakeTrack(lookup, 21, 5.0, 0.0, 50, 200 + trial);
+    const double yaw0 = mv.poses_true[0][3];
+    for (TrackFrame& f : mv.track.frames) {
+      f.detection.position += f.world_from_camera.linear().transpose() * (noise(rng) * Heading(yaw0));
+    }
+    const InitialState init = InitializeTrack(mv.track, FitOptions());
+    num_moving += !init.standing && std::abs(WrapAngle(init.poses[0][3] - yaw0)) < 0.2 &&
+                  std::abs(init.velocities[0][0] - 5.0) < 1.5;
+  }
+  EXPECT_EQ(num_moving, num_trials);
+  FitOptions bad;
+  bad.min_speed_significance = -1.0;
+  EXPECT_THROW(bad.Check(), Error);
+}
+
 TEST(Fitter, RecoversShapeAndArcTrajectory) {
   FitOptions options;
   TrackFitter fitter(Model(), options);
