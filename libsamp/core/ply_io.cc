@@ -14,6 +14,20 @@ void Put(std::ofstream& out, const T& value) {
   out.write(reinterpret_cast<const char*>(&value), sizeof(T));
 }
 
+// Some readers (assimp's binary PLY loader among them) skip whitespace after
+// "end_header\n" and so lose the first data byte when it happens to be one
+// (a float whose low byte is 0x0a, say): the rest of the file is then read
+// misaligned. Writers put first a vertex whose first byte is not whitespace:
+// the index of one (0 when the first already is).
+size_t SafeFirstVertex(const std::vector<Eigen::Vector3f>& points) {
+  for (size_t i = 0; i < points.size(); ++i) {
+    unsigned char first;
+    std::memcpy(&first, &points[i][0], 1);  // little-endian: the low byte of x
+    if (!(first == ' ' || (first >= '\t' && first <= '\r'))) return i;
+  }
+  return 0;
+}
+
 void Finish(std::ofstream& out, const std::string& path) {
   out.close();
   SAMP_CHECK(out) << "error writing " << path;
@@ -30,12 +44,15 @@ void WritePly(const std::string& path, const Mesh& mesh) {
         << "property float x\nproperty float y\nproperty float z\n"
         << "element face " << mesh.triangles.size() << "\n"
         << "property list uchar int vertex_indices\nend_header\n";
-    for (const Eigen::Vector3f& v : mesh.vertices) {
-      for (int a = 0; a < 3; ++a) Put(out, v[a]);
+    // Vertices 0 and `first` swap places (SafeFirstVertex).
+    const int first = int(SafeFirstVertex(mesh.vertices));
+    auto position = [&](int i) { return i == 0 ? first : i == first ? 0 : i; };
+    for (int i = 0; i < int(mesh.vertices.size()); ++i) {
+      for (int a = 0; a < 3; ++a) Put(out, mesh.vertices[size_t(position(i))][a]);
     }
     for (const Eigen::Vector3i& t : mesh.triangles) {
       Put(out, uint8_t(3));
-      for (int a = 0; a < 3; ++a) Put(out, int32_t(t[a]));
+      for (int a = 0; a < 3; ++a) Put(out, int32_t(position(t[a])));
     }
     Finish(out, temporary);
   });
@@ -54,7 +71,9 @@ void WritePly(const std::string& path, const PointCloud& cloud) {
         << "property float x\nproperty float y\nproperty float z\n";
     if (has_colors) out << "property uchar red\nproperty uchar green\nproperty uchar blue\n";
     out << "end_header\n";
-    for (size_t i = 0; i < cloud.points.size(); ++i) {
+    const size_t first = SafeFirstVertex(cloud.points);
+    for (size_t k = 0; k < cloud.points.size(); ++k) {
+      const size_t i = k == 0 ? first : k == first ? 0 : k;  // points 0 and `first` swapped
       for (int a = 0; a < 3; ++a) Put(out, cloud.points[i][a]);
       if (has_colors) {
         for (int a = 0; a < 3; ++a) Put(out, cloud.colors[i][a]);

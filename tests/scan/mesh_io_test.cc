@@ -2,7 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <fstream>
+#include <iterator>
+
 #include "libsamp/core/error.h"
+#include "libsamp/core/ply_io.h"
 #include "test_util.h"
 
 namespace samp {
@@ -100,6 +105,64 @@ TEST(MeshIo, ExportRoundTrip) {
   EXPECT_THROW(ExportMesh((dir / "box.xyz").string(), box), Error);
   EXPECT_THROW(ExportMesh((dir / "empty.ply").string(), Mesh()), Error);
   EXPECT_FALSE(fs::exists(dir / "empty.ply"));
+  fs::remove_all(dir);
+}
+
+// A float with the given low byte (little-endian: the first byte written).
+float WithLowByte(float value, unsigned char low) {
+  uint32_t bits;
+  std::memcpy(&bits, &value, 4);
+  bits = (bits & ~0xffu) | low;
+  std::memcpy(&value, &bits, 4);
+  return value;
+}
+
+TEST(MeshIo, PlyWhoseFirstDataByteIsWhitespaceReadsBack) {
+  // assimp's binary PLY reader skips whitespace after end_header; a first
+  // vertex whose x starts with '\n' misaligned the whole file (a fitted car
+  // mesh failed to load in samp eval). WritePly puts another vertex first.
+  const fs::path dir = test::TempDir("ply_whitespace");
+  for (const unsigned char low : {'\n', ' ', '\t', '\r'}) {
+    Mesh box = MakeBoxMesh(Eigen::Vector3d(-1, -2, -3), Eigen::Vector3d(1, 2, 3));
+    box.vertices[0].x() = WithLowByte(box.vertices[0].x(), low);
+    const std::string path = (dir / "box.ply").string();
+    WritePly(path, box);
+    const Mesh loaded = LoadMesh(path);
+    ASSERT_EQ(loaded.triangles.size(), box.triangles.size()) << int(low);
+    // The same triangles (as sets of corner positions), in any vertex order.
+    auto corners = [](const Mesh& m) {
+      std::vector<std::vector<float>> out;
+      for (const Eigen::Vector3i& t : m.triangles) {
+        std::vector<float> c;
+        for (int k = 0; k < 3; ++k)
+          for (int a = 0; a < 3; ++a) c.push_back(m.vertices[size_t(t[k])][a]);
+        out.push_back(c);
+      }
+      std::sort(out.begin(), out.end());
+      return out;
+    };
+    EXPECT_EQ(corners(loaded), corners(box)) << int(low);
+    // Point clouds: the first byte after the header is not whitespace, no point is lost.
+    PointCloud cloud;
+    cloud.points = {box.vertices[0], Eigen::Vector3f(0.5f, 0.25f, 2.0f), Eigen::Vector3f(1, 2, 3)};
+    const std::string cloud_path = (dir / "cloud.ply").string();
+    WritePly(cloud_path, cloud);
+    std::ifstream in(cloud_path, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const size_t data = bytes.find("end_header\n") + 11;
+    ASSERT_EQ(bytes.size(), data + 3 * 12);
+    EXPECT_FALSE(std::isspace(static_cast<unsigned char>(bytes[data])));
+    std::vector<std::vector<float>> written, expected;
+    for (int i = 0; i < 3; ++i) {
+      float p[3];
+      std::memcpy(p, bytes.data() + data + 12 * i, 12);
+      written.push_back({p[0], p[1], p[2]});
+      expected.push_back({cloud.points[i].x(), cloud.points[i].y(), cloud.points[i].z()});
+    }
+    std::sort(written.begin(), written.end());
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(written, expected);
+  }
   fs::remove_all(dir);
 }
 
