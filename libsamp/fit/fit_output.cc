@@ -157,6 +157,7 @@ nlohmann::json FitOptionsToJson(const FitOptions& o) {
   j["standing_speed"] = o.standing_speed;
   j["max_motion_off_axis"] = o.max_motion_off_axis;
   j["min_speed_significance"] = o.min_speed_significance;
+  j["ray_depth_inside"] = o.ray_depth_inside;
   j["straight_yaw_rate"] = o.straight_yaw_rate;
   j["motion_noise"] = {{"speed_noise", o.motion_noise.speed_noise},
                        {"yaw_rate_noise", o.motion_noise.yaw_rate_noise},

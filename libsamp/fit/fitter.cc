@@ -308,6 +308,15 @@ struct FitState {
   std::vector<std::string> models;
 };
 
+SdfCostOptions DataTermOptions(const TrackFrame& f, const FitOptions& options, double weight) {
+  SdfCostOptions o;
+  o.huber_threshold = options.huber_threshold;
+  o.weight = weight;
+  o.ray_depth_inside = options.ray_depth_inside;
+  o.camera_in_world = f.world_from_camera.translation();
+  return o;
+}
+
 SolveReport Solve(const ShapeLookup& lookup, const Track& track,
                   const std::vector<Association>& data, double sigma_scale,
                   const FitOptions& options, FitState* state) {
@@ -334,10 +343,10 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
     if (int(data[k].points.size()) >= options.min_points_per_frame) {
       std::vector<double> sigmas = data[k].sigmas;
       for (double& s : sigmas) s *= sigma_scale;
+      const SdfCostOptions cost_options = DataTermOptions(f, options, frame_weight);
       ceres::CostFunction* cost =
-          options.compress_data_blocks
-              ? CompressedSdfCost::Create(&lookup, data[k].points, sigmas, options.huber_threshold, frame_weight)
-              : SdfCost::Create(&lookup, data[k].points, sigmas, options.huber_threshold, frame_weight);
+          options.compress_data_blocks ? CompressedSdfCost::Create(&lookup, data[k].points, sigmas, cost_options)
+                                       : SdfCost::Create(&lookup, data[k].points, sigmas, cost_options);
       problem.AddResidualBlock(cost, nullptr, z, pose);
       report.num_points += int(data[k].points.size());
     }
@@ -471,15 +480,13 @@ TrackFit TrackFitter::Fit(const Track& track) const {
       out.yaw_rate = state.velocities[k][1];
     }
     if (out.num_points > 0) {
-      const Eigen::Isometry3d object_from_world = ObjectFromWorld(out.position, out.yaw);
+      // The data term as optimised (weight 1: the mean of rho over the points).
+      const SdfCost cost(&lookup_, data[k].points, data[k].sigmas, DataTermOptions(f, options_, 1.0));
+      std::vector<double> residuals(data[k].points.size());
+      cost.EvaluateRows(z.data(), state.poses[k].data(), residuals.data(), nullptr, 0, nullptr, 0);
       double sum = 0.0;
-      for (size_t i = 0; i < data[k].points.size(); ++i) {
-        const Eigen::Vector3d o = object_from_world * data[k].points[i];
-        const double s = lookup_.Evaluate(z.data(), o.data(), nullptr, nullptr) / data[k].sigmas[i];
-        const double psi = SdfCost::Psi(s, options_.huber_threshold, nullptr);
-        sum += psi * psi;
-      }
-      out.data_cost = sum / double(data[k].points.size());
+      for (double r : residuals) sum += r * r;
+      out.data_cost = sum;
       if (options_.keep_points) out.points_in_world = data[k].points;
     }
   }

@@ -38,6 +38,10 @@ struct FitOptions {
   bool compress_data_blocks = true;
   // Huber threshold of the data term, in units of sigma_d.
   double huber_threshold = 1.0;
+  // Data term: measure points inside the shape by their depth below the
+  // visible surface along the viewing ray rather than by phi (sdf_cost.h;
+  // removes the pull towards the camera under large stereo noise).
+  bool ray_depth_inside = false;
   // Standard deviation of the car's height above that frame's road plane, m.
   double sigma_ground = 0.1;
   // Weight lambda of the shape prior lambda sum (z_i / sigma_i)^2.

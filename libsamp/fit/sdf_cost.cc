@@ -11,17 +11,38 @@
 
 namespace samp {
 
+namespace {
+
+// Ray distance: at most this many sphere-tracing steps, each at least half a
+// voxel; Newton steps on the bracketed crossing; at most kMaxRayRatio |phi|;
+// crossings with |grad phi . u| below kMinRaySlope (grazing) count as misses.
+constexpr int kMaxMarchSteps = 24;
+constexpr int kNewtonSteps = 3;
+constexpr double kMaxRayRatio = 5.0;
+constexpr double kMinRaySlope = 0.05;
+
+}  // namespace
+
 SdfCost::SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
-                 const std::vector<double>& sigmas, double huber_threshold, double weight)
-    : lookup_(lookup), huber_(huber_threshold) {
+                 const std::vector<double>& sigmas, const SdfCostOptions& options)
+    : lookup_(lookup), huber_(options.huber_threshold) {
   SAMP_CHECK(lookup != nullptr) << "SdfCost: null shape lookup";
   SAMP_CHECK(!points_in_world.empty()) << "SdfCost: no points";
   SAMP_CHECK(points_in_world.size() == sigmas.size())
       << "SdfCost: " << points_in_world.size() << " points but " << sigmas.size() << " sigmas";
-  SAMP_CHECK(huber_threshold > 0.0) << "SdfCost: Huber threshold must be > 0";
-  SAMP_CHECK(weight > 0.0) << "SdfCost: weight must be > 0";
+  SAMP_CHECK(options.huber_threshold > 0.0) << "SdfCost: Huber threshold must be > 0";
+  SAMP_CHECK(options.weight > 0.0) << "SdfCost: weight must be > 0";
+  SAMP_CHECK(options.camera_in_world.allFinite()) << "SdfCost: camera centre is not finite";
   const size_t n = points_in_world.size();
-  sqrt_weight_ = std::sqrt(weight / double(n));
+  sqrt_weight_ = std::sqrt(options.weight / double(n));
+  if (options.ray_depth_inside) {
+    rays_.resize(3 * n);
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d ray = points_in_world[i] - options.camera_in_world;
+      SAMP_CHECK(ray.norm() > 0.0) << "SdfCost: point " << i << " is at the camera centre";
+      for (int a = 0; a < 3; ++a) rays_[3 * i + a] = ray[a] / ray.norm();
+    }
+  }
   points_.resize(3 * n);
   inv_sigmas_.resize(n);
   for (size_t i = 0; i < n; ++i) {
@@ -65,11 +86,37 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, double* residual
     const double dx = points_[3 * i] - pose[0];
     const double dy = points_[3 * i + 1] - pose[1];
     const double dz = points_[3 * i + 2] - pose[2];
-    const double o[3] = {c * dx - s * dz, dy, s * dx + c * dz};
+    double o[3] = {c * dx - s * dz, dy, s * dx + c * dz};
     double g[3];
     double* dz_row = jz ? jz + size_t(i) * jz_stride : nullptr;
-    const double phi = lookup_->EvaluateDense(phi_z, o, jp ? g : nullptr, dz_row);
+    double phi = lookup_->EvaluateDense(phi_z, o, jp ? g : nullptr, dz_row);
     if (!std::isfinite(phi)) return false;
+    if (!rays_.empty() && phi != 0.0) {
+      // Distance along the viewing ray (capped at kMaxRayRatio |phi|).
+      const double* w = &rays_[3 * i];
+      const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
+      double distance, crossing[3];
+      double m = kMaxRayRatio;  // the cap: kMaxRayRatio phi at o
+      double g_crossing[3];
+      if (RayDistance(phi_z, o, phi, u, &distance, crossing, g_crossing)) {
+        // phi_eff = sign(phi) distance; by implicit differentiation of
+        // phi(crossing) = 0 its derivatives are those of phi at the crossing
+        // times m = -1 / (grad phi . u) (RayDistance ensures grad phi . u < 0).
+        m = -1.0 / (g_crossing[0] * u[0] + g_crossing[1] * u[1] + g_crossing[2] * u[2]);
+        for (int a = 0; a < 3; ++a) {
+          o[a] = crossing[a];
+          g[a] = g_crossing[a];
+        }
+        if (dz_row) lookup_->EvaluateDense(phi_z, crossing, nullptr, dz_row);
+        phi = phi < 0.0 ? -distance : distance;
+      } else {
+        phi *= m;  // g (when needed) and dz_row are phi's at o
+      }
+      for (int a = 0; a < 3; ++a) g[a] *= m;
+      if (dz_row) {
+        for (int r = 0; r < nr; ++r) dz_row[r] *= m;
+      }
+    }
     double d_psi = 1.0;
     const double scaled = phi * inv_sigmas_[i];  // s_i = phi / sigma_i
     residuals[i] = sqrt_weight_ * Psi(scaled, huber_, &d_psi);
@@ -86,6 +133,45 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, double* residual
       row[3] = f * (-g[0] * o[2] + g[2] * o[0]);
     }
   }
+  return true;
+}
+
+bool SdfCost::RayDistance(const double* phi_z, const double* o, double phi_o, const double* u,
+                          double* distance, double* c, double* g_c) const {
+  const double min_step = 0.5 * lookup_->grid().voxel_size;
+  const double sign = phi_o < 0.0 ? -1.0 : 1.0;  // inside: towards the camera
+  auto at = [&](double d, double* p) {
+    for (int a = 0; a < 3; ++a) p[a] = o[a] + sign * d * u[a];
+  };
+  auto same_side = [&](double v) { return sign < 0.0 ? v < 0.0 : v > 0.0; };
+  // Sphere tracing: |phi| bounds the distance to the surface.
+  double lo = 0.0, phi_lo = phi_o, hi = 0.0, phi_hi = phi_o;
+  const double limit = kMaxRayRatio * std::abs(phi_o);
+  for (int k = 0; k < kMaxMarchSteps && same_side(phi_hi) && hi <= limit; ++k) {
+    lo = hi;
+    phi_lo = phi_hi;
+    hi = lo + std::max(std::abs(phi_lo), min_step);
+    at(hi, c);
+    phi_hi = lookup_->EvaluateDense(phi_z, c, nullptr, nullptr);
+    if (!std::isfinite(phi_hi)) return false;
+  }
+  if (same_side(phi_hi)) return false;
+  // Secant in the bracket [lo, hi], then Newton steps kept inside it.
+  double d = lo + (hi - lo) * phi_lo / (phi_lo - phi_hi);
+  for (int k = 0; k < kNewtonSteps; ++k) {
+    double g[3];
+    at(d, c);
+    const double v = lookup_->EvaluateDense(phi_z, c, g, nullptr);
+    const double slope = sign * (g[0] * u[0] + g[1] * u[1] + g[2] * u[2]);  // d phi / d distance
+    if (slope == 0.0 || !std::isfinite(slope)) break;
+    d = std::min(std::max(d - v / slope, lo), hi);
+  }
+  if (d > limit) return false;
+  at(d, c);
+  lookup_->EvaluateDense(phi_z, c, g_c, nullptr);
+  // A crossing at a grazing angle (or none after all) counts as a miss.
+  if (!(g_c[0] * u[0] + g_c[1] * u[1] + g_c[2] * u[2] < -kMinRaySlope)) return false;
+  *distance = d;
   return true;
 }
 
@@ -135,17 +221,16 @@ std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SpatiallySorted(
 
 CompressedSdfCost::CompressedSdfCost(const ShapeLookup* lookup,
                                      const std::vector<Eigen::Vector3d>& points_in_world,
-                                     const std::vector<double>& sigmas, double huber_threshold,
-                                     double weight)
+                                     const std::vector<double>& sigmas, const SdfCostOptions& options)
     : CompressedSdfCost(lookup,
                         SpatiallySorted(points_in_world, sigmas,
                                         lookup != nullptr ? lookup->grid().voxel_size : 1.0),
-                        huber_threshold, weight) {}
+                        options) {}
 
 CompressedSdfCost::CompressedSdfCost(const ShapeLookup* lookup,
                                      const std::pair<std::vector<Eigen::Vector3d>, std::vector<double>>& sorted,
-                                     double huber_threshold, double weight)
-    : full_(lookup, sorted.first, sorted.second, huber_threshold, weight),
+                                     const SdfCostOptions& options)
+    : full_(lookup, sorted.first, sorted.second, options),
       num_components_(lookup->num_components()) {
   set_num_residuals(num_components_ + 4 + 1);
   mutable_parameter_block_sizes()->push_back(num_components_);

@@ -18,6 +18,19 @@
 //   d r_i / d theta =  sqrt(w/N) psi'(s_i) / sigma_i * grad phi . (-o_z, 0, o_x)
 // where o = the point in the object frame.
 // Parameter blocks: z (R values), pose (tx, ty, tz, theta).
+//
+// Option ray_depth_inside (SdfCostOptions): for a point inside the shape
+// (phi < 0) the distance is measured along the viewing ray instead: s_i =
+// -d_i / sigma_i, d_i >= 0 the depth of the point below the first surface
+// crossing towards the camera, c_i = o - d_i u (u the unit ray from the camera
+// in the object frame), found by sphere tracing on phi_z and refined by Newton
+// steps. Stereo noise is along the ray; with noise larger than the car's half
+// width the Euclidean phi of points behind the visible surface saturates (and
+// falls again towards the far side) while that of points in front grows, which
+// pulls the fit towards the camera; the ray depth keeps growing. By implicit
+// differentiation of phi_z(c) = 0 (m = -1 / (grad phi(c) . u), clamped to
+// <= 1 / 0.2), the Jacobians are those of phi above taken at c (with c in the
+// d/dtheta term) and multiplied by m.
 #pragma once
 
 #include <ceres/cost_function.h>
@@ -30,17 +43,28 @@
 
 namespace samp {
 
+struct SdfCostOptions {
+  double huber_threshold = 1.0;  // k, in units of sigma
+  double weight = 1.0;           // w (1 / T for one frame of a T-frame track)
+  // Inside points by their depth along the viewing ray from camera_in_world
+  // (see above); off: phi everywhere, as the paper.
+  bool ray_depth_inside = false;
+  Eigen::Vector3d camera_in_world = Eigen::Vector3d::Zero();
+};
+
 class SdfCost : public ceres::CostFunction {
  public:
   // `lookup` must outlive the cost. points and sigmas have equal, non-zero size.
   SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
-          const std::vector<double>& sigmas, double huber_threshold, double weight);
+          const std::vector<double>& sigmas, const SdfCostOptions& options);
+  SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
+          const std::vector<double>& sigmas, double huber_threshold, double weight)
+      : SdfCost(lookup, points_in_world, sigmas, SdfCostOptions{huber_threshold, weight}) {}
 
   static ceres::CostFunction* Create(const ShapeLookup* lookup,
                                      const std::vector<Eigen::Vector3d>& points_in_world,
-                                     const std::vector<double>& sigmas, double huber_threshold,
-                                     double weight) {
-    return new SdfCost(lookup, points_in_world, sigmas, huber_threshold, weight);
+                                     const std::vector<double>& sigmas, const SdfCostOptions& options) {
+    return new SdfCost(lookup, points_in_world, sigmas, options);
   }
 
   bool Evaluate(double const* const* parameters, double* residuals,
@@ -57,8 +81,16 @@ class SdfCost : public ceres::CostFunction {
   static double Psi(double s, double k, double* d_psi);
 
  private:
+  // Distance from o along the object-frame viewing ray u to the surface:
+  // towards the camera (-u) from inside (phi_o < 0), away from it from
+  // outside; the crossing c and grad phi there. False when none is found
+  // within kMaxRayRatio |phi_o| or the ray grazes the surface.
+  bool RayDistance(const double* phi_z, const double* o, double phi_o, const double* u, double* distance,
+                   double* c, double* g_c) const;
+
   const ShapeLookup* lookup_;
   std::vector<double> points_;  // 3 per point
+  std::vector<double> rays_;    // 3 per point (unit, world), ray_depth_inside only
   std::vector<double> inv_sigmas_;  // 1 / sigma_i
   double huber_ = 1.0;
   double sqrt_weight_ = 1.0;    // sqrt(w / N)
@@ -82,13 +114,15 @@ class SdfCost : public ceres::CostFunction {
 class CompressedSdfCost : public ceres::CostFunction {
  public:
   CompressedSdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
-                    const std::vector<double>& sigmas, double huber_threshold, double weight);
+                    const std::vector<double>& sigmas, const SdfCostOptions& options);
+  CompressedSdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
+                    const std::vector<double>& sigmas, double huber_threshold, double weight)
+      : CompressedSdfCost(lookup, points_in_world, sigmas, SdfCostOptions{huber_threshold, weight}) {}
 
   static ceres::CostFunction* Create(const ShapeLookup* lookup,
                                      const std::vector<Eigen::Vector3d>& points_in_world,
-                                     const std::vector<double>& sigmas, double huber_threshold,
-                                     double weight) {
-    return new CompressedSdfCost(lookup, points_in_world, sigmas, huber_threshold, weight);
+                                     const std::vector<double>& sigmas, const SdfCostOptions& options) {
+    return new CompressedSdfCost(lookup, points_in_world, sigmas, options);
   }
 
   bool Evaluate(double const* const* parameters, double* residuals,
@@ -97,7 +131,7 @@ class CompressedSdfCost : public ceres::CostFunction {
  private:
   CompressedSdfCost(const ShapeLookup* lookup,
                     const std::pair<std::vector<Eigen::Vector3d>, std::vector<double>>& sorted,
-                    double huber_threshold, double weight);
+                    const SdfCostOptions& options);
 
   SdfCost full_;  // on the points in Morton order (locality of the lookups)
   int num_components_;

@@ -141,13 +141,91 @@ TEST(SdfCost, ResidualAndJacobians) {
   }
 }
 
+// Distance from o along unit direction dir to the first sign change of phi_z,
+// by fine stepping (reference for the ray distance).
+double BruteForceRayDistance(const ShapeLookup& lookup, const Eigen::VectorXd& z, const Eigen::Vector3d& o,
+                             const Eigen::Vector3d& dir, double max_distance) {
+  const double phi_o = lookup.Evaluate(z, o);
+  const double step = 1e-4;
+  for (double d = step; d <= max_distance; d += step) {
+    const double v = lookup.Evaluate(z, Eigen::Vector3d(o + d * dir));
+    if ((v < 0.0) != (phi_o < 0.0)) {
+      const double v0 = lookup.Evaluate(z, Eigen::Vector3d(o + (d - step) * dir));
+      return d - step + step * v0 / (v0 - v);
+    }
+  }
+  return -1.0;  // no crossing
+}
+
+TEST(SdfCost, RayDistanceResidualsAndJacobians) {
+  const ShapeLookup& lookup = Lookup();
+  std::mt19937 rng(8);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const Eigen::VectorXd z_true = 0.5 * lookup.sigmas();
+  const auto surface = testing::SampleSurface(lookup, z_true, 80, &rng);
+  const Eigen::Vector3d camera(1.0, -0.3, 2.0);
+  for (const double yaw : {0.4, M_PI - 1e-6, -2.0}) {
+    const Eigen::Vector3d t(4.0, 1.6, 15.0);
+    const Eigen::Isometry3d world_from_object = WorldFromObject(t, yaw);
+    std::vector<Eigen::Vector3d> points;
+    std::vector<double> sigmas;
+    for (const auto& p : surface) {
+      // Noise along the viewing ray, as stereo; a few points off to the side.
+      const Eigen::Vector3d w = world_from_object * p;
+      const Eigen::Vector3d ray = (w - camera).normalized();
+      points.push_back(w + 0.4 * n(rng) * ray + 0.05 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
+      sigmas.push_back(0.1 + 0.05 * std::abs(n(rng)));
+    }
+    SdfCostOptions options;
+    options.huber_threshold = 2.0;
+    options.weight = 0.25;
+    options.ray_depth_inside = true;
+    options.camera_in_world = camera;
+    SdfCost cost(&lookup, points, sigmas, options);
+    Eigen::VectorXd z = 0.3 * lookup.sigmas();
+    double pose[4] = {t.x() + 0.05, t.y() - 0.02, t.z() + 0.03, yaw + 0.01};
+    std::vector<double> residuals(points.size());
+    const double* params[2] = {z.data(), pose};
+    ASSERT_TRUE(cost.Evaluate(params, residuals.data(), nullptr));
+    // Residuals: the signed distance along the ray (towards the camera from
+    // inside, away from it outside), capped at 5 |phi|.
+    const Eigen::Isometry3d object_from_world = ObjectFromWorld(Eigen::Vector3d(pose[0], pose[1], pose[2]), pose[3]);
+    int num_inside = 0, num_hits = 0;
+    for (size_t i = 0; i < points.size(); ++i) {
+      const Eigen::Vector3d o = object_from_world * points[i];
+      const Eigen::Vector3d u = object_from_world.linear() * (points[i] - camera).normalized();
+      const double phi = lookup.Evaluate(z, o);
+      num_inside += phi < 0.0;
+      const double d = BruteForceRayDistance(lookup, z, o, phi < 0.0 ? Eigen::Vector3d(-u) : u, 5 * std::abs(phi));
+      num_hits += d >= 0.0;
+      const double expected_phi = d >= 0.0 ? (phi < 0.0 ? -d : d) : 5.0 * phi;
+      const double expected = std::sqrt(options.weight / points.size()) *
+                              SdfCost::Psi(expected_phi / sigmas[i], options.huber_threshold, nullptr);
+      EXPECT_NEAR(residuals[i], expected, 2e-3 * std::abs(expected) + 1e-5) << "point " << i << " phi " << phi;
+      EXPECT_GE(std::abs(expected_phi), std::abs(phi) - 1e-3) << "the ray distance is at least |phi|";
+    }
+    EXPECT_GT(num_inside, 15);
+    EXPECT_GT(num_hits, 10);  // both paths: rays that reach the surface within 5 |phi| and rays that do not
+    EXPECT_GT(int(points.size()) - num_hits, 10);
+    ExpectJacobiansMatch(cost, {z.data(), pose}, 1e-5, "ray distance, yaw " + std::to_string(yaw));
+  }
+  SdfCostOptions bad;
+  bad.ray_depth_inside = true;
+  bad.camera_in_world = Eigen::Vector3d(4.0, 1.6, 15.0);
+  EXPECT_THROW(SdfCost(&lookup, {Eigen::Vector3d(4.0, 1.6, 15.0)}, {0.1}, bad), Error);
+}
+
 TEST(CompressedSdfCost, SameCostGradientAndGaussNewtonMatrix) {
   const ShapeLookup& lookup = Lookup();
   std::mt19937 rng(4);
   std::normal_distribution<double> n(0.0, 1.0);
   const Eigen::VectorXd z_true = 0.5 * lookup.sigmas();
   const auto surface = testing::SampleSurface(lookup, z_true, 300, &rng);
+  for (const bool ray : {false, true})
   for (double offset : {0.05, 0.5, 4.0}) {  // last: many points outside the grid
+    SdfCostOptions options;
+    options.weight = 0.2;
+    options.ray_depth_inside = ray;
     const Eigen::Isometry3d world_from_object = WorldFromObject(Eigen::Vector3d(3, 1.6, 12), M_PI - 0.01);
     std::vector<Eigen::Vector3d> points;
     std::vector<double> sigmas;
@@ -155,8 +233,8 @@ TEST(CompressedSdfCost, SameCostGradientAndGaussNewtonMatrix) {
       points.push_back(world_from_object * (p + offset * Eigen::Vector3d(n(rng), n(rng), n(rng))));
       sigmas.push_back(0.1);
     }
-    SdfCost full(&lookup, points, sigmas, 1.0, 0.2);
-    CompressedSdfCost compressed(&lookup, points, sigmas, 1.0, 0.2);
+    SdfCost full(&lookup, points, sigmas, options);
+    CompressedSdfCost compressed(&lookup, points, sigmas, options);
     ASSERT_EQ(compressed.num_residuals(), 10);
     Eigen::VectorXd z = -0.2 * lookup.sigmas();
     double pose[4] = {3.1, 1.55, 12.05, -M_PI + 0.02};
@@ -174,7 +252,7 @@ TEST(CompressedSdfCost, SameCostGradientAndGaussNewtonMatrix) {
     af << jzf, jpf;
     ac << jzc, jpc;
     const double scale = std::max(1.0, rf.squaredNorm());
-    EXPECT_NEAR(rc.squaredNorm(), rf.squaredNorm(), 1e-9 * scale) << "offset " << offset;
+    EXPECT_NEAR(rc.squaredNorm(), rf.squaredNorm(), 1e-9 * scale) << "offset " << offset << " ray " << ray;
     EXPECT_NEAR(rc_cost.squaredNorm(), rf.squaredNorm(), 1e-9 * scale);
     const Eigen::VectorXd gf = af.transpose() * rf, gc = ac.transpose() * rc;
     EXPECT_LT((gf - gc).cwiseAbs().maxCoeff(), 1e-8 * std::max(1.0, gf.cwiseAbs().maxCoeff()));

@@ -202,6 +202,42 @@ TEST(Fitter, StandingCarAndSingleFrameMode) {
   EXPECT_EQ(single.Fit(one).frames.size(), 1u);
 }
 
+TEST(Fitter, RayDistanceRemovesThePullTowardsTheCameraUnderDepthNoise) {
+  // Stereo-like noise: 0.8 m (s.d.) along the viewing ray (from the camera
+  // at the world origin), more than the car's half width. With phi as the
+  // residual, points pushed behind the visible surface saturate while those
+  // in front grow, so the fit moves towards the camera; the ray distance
+  // removes most of that pull.
+  const ShapeLookup lookup(Model());
+  Synthetic s = MakeTrack(lookup, 9, 0.0, 0.0, 400, 21);
+  std::mt19937 rng(22);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (TrackFrame& f : s.track.frames) {
+    for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
+      Eigen::Vector3d& p = f.candidate_points_in_world[i];
+      p += 0.8 * n(rng) * p.normalized();
+      f.candidate_sigmas[i] = 0.8;
+    }
+  }
+  auto along_ray_error = [&](bool ray) {
+    FitOptions options;
+    options.ray_depth_inside = ray;
+    options.em_iterations = 0;
+    const TrackFit fit = TrackFitter(Model(), options).Fit(s.track);
+    EXPECT_TRUE(fit.summary.usable);
+    double sum = 0.0;
+    for (size_t k = 0; k < fit.frames.size(); ++k) {
+      const Eigen::Vector3d truth = s.poses_true[k].head<3>();
+      sum += (fit.frames[k].position - truth).dot(truth.normalized());
+    }
+    return sum / double(fit.frames.size());
+  };
+  const double sdf_error = along_ray_error(false), ray_error = along_ray_error(true);
+  EXPECT_LT(sdf_error, -0.15) << "the phi residual is expected to pull towards the camera";
+  EXPECT_LT(std::abs(ray_error), 0.15);  // measured -0.24 m (phi) and -0.10 m (ray)
+  EXPECT_LT(std::abs(ray_error), 0.5 * std::abs(sdf_error));
+}
+
 TEST(Fitter, BadTracksThrowWithTheirName) {
   TrackFitter fitter(Model(), FitOptions());
   Synthetic s = MakeTrack(fitter.lookup(), 3, 5.0, 0.0, 50, 13);

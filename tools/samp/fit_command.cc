@@ -48,6 +48,10 @@ void RegisterFitCommand(CLI::App* app) {
   command->add_option("--huber", o.fit.huber_threshold, "Huber threshold of the data term, in sigma_d")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  command->add_flag("--ray-depth-inside,!--no-ray-depth-inside", o.fit.ray_depth_inside,
+                    "Data term: points inside the shape count by their depth below the visible surface along "
+                    "the viewing ray, not by the SDF (docs/fitting.md)")
+      ->capture_default_str();
   command->add_option("--association-radius", o.fit.association_radius,
                       "Initial association: points within this distance of the detection, m")
       ->capture_default_str()
