@@ -483,7 +483,8 @@ TrackFit TrackFitter::Fit(const Track& track) const {
       // The data term as optimised (weight 1: the mean of rho over the points).
       const SdfCost cost(&lookup_, data[k].points, data[k].sigmas, DataTermOptions(f, options_, 1.0));
       std::vector<double> residuals(data[k].points.size());
-      cost.EvaluateRows(z.data(), state.poses[k].data(), residuals.data(), nullptr, 0, nullptr, 0);
+      cost.EvaluateRows(z.data(), state.poses[k].data(), 0, cost.num_residuals(), residuals.data(), nullptr, 0,
+                        nullptr, 0);
       double sum = 0.0;
       for (double r : residuals) sum += r * r;
       out.data_cost = sum;

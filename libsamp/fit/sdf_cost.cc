@@ -3,9 +3,6 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <limits>
-#include <utility>
 
 #include "libsamp/core/error.h"
 
@@ -57,38 +54,27 @@ SdfCost::SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& 
   mutable_parameter_block_sizes()->push_back(4);
 }
 
-double SdfCost::Psi(double s, double k, double* d_psi) {
-  const double a = std::abs(s);
-  if (a <= k) {
-    if (d_psi) *d_psi = 1.0;
-    return s;
-  }
-  const double root = std::sqrt(2.0 * k * a - k * k);
-  if (d_psi) *d_psi = k / root;
-  return s > 0.0 ? root : -root;
-}
-
 bool SdfCost::Evaluate(double const* const* parameters, double* residuals,
                        double** jacobians) const {
   const int nr = lookup_->num_components();
   double* jz = jacobians ? jacobians[0] : nullptr;
   double* jp = jacobians ? jacobians[1] : nullptr;
-  return EvaluateRows(parameters[0], parameters[1], residuals, jz, nr, jp, 4);
+  return EvaluateRows(parameters[0], parameters[1], 0, num_residuals(), residuals, jz, nr, jp, 4);
 }
 
-bool SdfCost::EvaluateRows(const double* z, const double* pose, double* residuals, double* jz,
-                           int jz_stride, double* jp, int jp_stride) const {
+bool SdfCost::EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals,
+                           double* jz, int jz_stride, double* jp, int jp_stride) const {
   const int nr = lookup_->num_components();
-  const int n = num_residuals();
   const double c = std::cos(pose[3]), s = std::sin(pose[3]);
   const double* phi_z = lookup_->DenseCached(z);
-  for (int i = 0; i < n; ++i) {
+  for (int row = 0; row < end - begin; ++row) {
+    const int i = begin + row;
     const double dx = points_[3 * i] - pose[0];
     const double dy = points_[3 * i + 1] - pose[1];
     const double dz = points_[3 * i + 2] - pose[2];
     double o[3] = {c * dx - s * dz, dy, s * dx + c * dz};
     double g[3];
-    double* dz_row = jz ? jz + size_t(i) * jz_stride : nullptr;
+    double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
     double phi = lookup_->EvaluateDense(phi_z, o, jp ? g : nullptr, dz_row);
     if (!std::isfinite(phi)) return false;
     if (!rays_.empty() && phi != 0.0) {
@@ -119,18 +105,18 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, double* residual
     }
     double d_psi = 1.0;
     const double scaled = phi * inv_sigmas_[i];  // s_i = phi / sigma_i
-    residuals[i] = sqrt_weight_ * Psi(scaled, huber_, &d_psi);
+    residuals[row] = sqrt_weight_ * Psi(scaled, huber_, &d_psi);
     const double f = sqrt_weight_ * d_psi * inv_sigmas_[i];
     if (dz_row) {
       for (int r = 0; r < nr; ++r) dz_row[r] *= f;
     }
     if (jp) {
-      double* row = jp + size_t(i) * jp_stride;
+      double* p = jp + size_t(row) * jp_stride;
       // R grad = (c g0 + s g2, g1, -s g0 + c g2).
-      row[0] = -f * (c * g[0] + s * g[2]);
-      row[1] = -f * g[1];
-      row[2] = -f * (-s * g[0] + c * g[2]);
-      row[3] = f * (-g[0] * o[2] + g[2] * o[0]);
+      p[0] = -f * (c * g[0] + s * g[2]);
+      p[1] = -f * g[1];
+      p[2] = -f * (-s * g[0] + c * g[2]);
+      p[3] = f * (-g[0] * o[2] + g[2] * o[0]);
     }
   }
   return true;
@@ -175,62 +161,10 @@ bool SdfCost::RayDistance(const double* phi_z, const double* o, double phi_o, co
   return true;
 }
 
-namespace {
-
-// Spreads the low 10 bits of v to every third bit (Morton code).
-uint32_t Spread3(uint32_t v) {
-  v &= 0x3ff;
-  v = (v | (v << 16)) & 0x30000ff;
-  v = (v | (v << 8)) & 0x300f00f;
-  v = (v | (v << 4)) & 0x30c30c3;
-  v = (v | (v << 2)) & 0x9249249;
-  return v;
-}
-
-// The points (and sigmas) in Morton order of their voxel-sized cells, so that
-// successive lookups touch neighbouring grid rows (the cost is a sum: the
-// order does not change it).
-std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SpatiallySorted(
-    const std::vector<Eigen::Vector3d>& points, const std::vector<double>& sigmas, double cell) {
-  SAMP_CHECK(points.size() == sigmas.size())
-      << "SdfCost: " << points.size() << " points but " << sigmas.size() << " sigmas";
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  for (const Eigen::Vector3d& p : points) lo = lo.cwiseMin(p);
-  std::vector<std::pair<uint32_t, size_t>> keys(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    uint32_t key = 0;
-    for (int a = 0; a < 3; ++a) {
-      const double u = (points[i][a] - lo[a]) / cell;
-      const uint32_t q = std::isfinite(u) ? uint32_t(std::min(u, 1023.0)) : 0u;
-      key |= Spread3(q) << a;
-    }
-    keys[i] = {key, i};
-  }
-  std::sort(keys.begin(), keys.end());
-  std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> out;
-  out.first.reserve(points.size());
-  out.second.reserve(points.size());
-  for (const auto& [key, i] : keys) {
-    out.first.push_back(points[i]);
-    out.second.push_back(sigmas[i]);
-  }
-  return out;
-}
-
-}  // namespace
-
 CompressedSdfCost::CompressedSdfCost(const ShapeLookup* lookup,
                                      const std::vector<Eigen::Vector3d>& points_in_world,
                                      const std::vector<double>& sigmas, const SdfCostOptions& options)
-    : CompressedSdfCost(lookup,
-                        SpatiallySorted(points_in_world, sigmas,
-                                        lookup != nullptr ? lookup->grid().voxel_size : 1.0),
-                        options) {}
-
-CompressedSdfCost::CompressedSdfCost(const ShapeLookup* lookup,
-                                     const std::pair<std::vector<Eigen::Vector3d>, std::vector<double>>& sorted,
-                                     const SdfCostOptions& options)
-    : full_(lookup, sorted.first, sorted.second, options),
+    : full_(lookup, points_in_world, sigmas, options),
       num_components_(lookup->num_components()) {
   set_num_residuals(num_components_ + 4 + 1);
   mutable_parameter_block_sizes()->push_back(num_components_);
@@ -242,37 +176,48 @@ bool CompressedSdfCost::Evaluate(double const* const* parameters, double* residu
   using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const int n = full_.num_residuals();
   const int nr = num_components_, m = nr + 4;
-  // Per-thread scratch (N and N x (R + 4)): avoids large allocations per call.
+  // The points in chunks whose rows stay in the L1/L2 cache: J^T J, J^T r
+  // and |r|^2 are accumulated chunk by chunk (per-thread scratch).
+  constexpr int kChunk = 256;
   thread_local std::vector<double> r_buffer, j_buffer;
-  r_buffer.resize(size_t(n));
+  r_buffer.resize(kChunk);
   const bool need_jacobians = jacobians && (jacobians[0] || jacobians[1]);
+  double squared_norm = 0.0;
   if (!need_jacobians) {
-    if (!full_.EvaluateRows(parameters[0], parameters[1], r_buffer.data(), nullptr, 0, nullptr, 0)) {
-      return false;
+    for (int begin = 0; begin < n; begin += kChunk) {
+      const int end = std::min(n, begin + kChunk);
+      if (!full_.EvaluateRows(parameters[0], parameters[1], begin, end, r_buffer.data(), nullptr, 0, nullptr, 0)) {
+        return false;
+      }
+      for (int i = 0; i < end - begin; ++i) squared_norm += r_buffer[size_t(i)] * r_buffer[size_t(i)];
     }
-    const Eigen::Map<const Eigen::VectorXd> r(r_buffer.data(), n);
     for (int k = 0; k < m; ++k) residuals[k] = 0.0;
-    residuals[m] = r.norm();
+    residuals[m] = std::sqrt(squared_norm);
     return true;
   }
   // J = [d/dz | d/dpose], one row per point.
-  j_buffer.resize(size_t(n) * m);
-  if (!full_.EvaluateRows(parameters[0], parameters[1], r_buffer.data(), j_buffer.data(), m,
-                          j_buffer.data() + nr, m)) {
-    return false;
-  }
-  const Eigen::Map<const Eigen::VectorXd> r(r_buffer.data(), n);
-  const Eigen::Map<const RowMatrix> j(j_buffer.data(), n, m);
+  j_buffer.resize(size_t(kChunk) * m);
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(m, m);
-  h.selfadjointView<Eigen::Lower>().rankUpdate(j.transpose());
-  const Eigen::VectorXd g = j.transpose() * r;
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(m);
+  for (int begin = 0; begin < n; begin += kChunk) {
+    const int end = std::min(n, begin + kChunk), rows = end - begin;
+    if (!full_.EvaluateRows(parameters[0], parameters[1], begin, end, r_buffer.data(), j_buffer.data(), m,
+                            j_buffer.data() + nr, m)) {
+      return false;
+    }
+    const Eigen::Map<const Eigen::VectorXd> r(r_buffer.data(), rows);
+    const Eigen::Map<const RowMatrix> j(j_buffer.data(), rows, m);
+    h.selfadjointView<Eigen::Lower>().rankUpdate(j.transpose());
+    g.noalias() += j.transpose() * r;
+    squared_norm += r.squaredNorm();
+  }
   const double eps = 1e-12 * std::max(h.trace(), 1e-300);
   h.diagonal().array() += eps;
   Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(h);
   if (llt.info() != Eigen::Success) return false;
   const Eigen::VectorXd rc = llt.matrixL().solve(g);
   for (int k = 0; k < m; ++k) residuals[k] = rc[k];
-  residuals[m] = std::sqrt(std::max(0.0, r.squaredNorm() - rc.squaredNorm()));
+  residuals[m] = std::sqrt(std::max(0.0, squared_norm - rc.squaredNorm()));
   const RowMatrix lt = llt.matrixL().transpose();  // m x m, upper
   // Row k of the compressed Jacobian = row k of L^T; last row zero.
   if (jacobians[0]) {

@@ -36,7 +36,7 @@
 #include <ceres/cost_function.h>
 
 #include <Eigen/Core>
-#include <utility>
+#include <cmath>
 #include <vector>
 
 #include "libsamp/model/shape_lookup.h"
@@ -70,15 +70,25 @@ class SdfCost : public ceres::CostFunction {
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override;
 
-  // Evaluate() with the Jacobian rows written with strides: row i of d/dz
-  // (R values) at jz + i jz_stride, of d/d(t, theta) (4 values) at
+  // Evaluate() for the points [begin, end) with the Jacobian rows written
+  // with strides: residual of point begin + i at residuals[i], its row of
+  // d/dz (R values) at jz + i jz_stride, of d/d(t, theta) (4 values) at
   // jp + i jp_stride; null jz / jp skip them. phi_z comes from the lookup's
   // per-thread dense grid of z (ShapeLookup::DenseCached).
-  bool EvaluateRows(const double* z, const double* pose, double* residuals, double* jz, int jz_stride,
-                    double* jp, int jp_stride) const;
+  bool EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals, double* jz,
+                    int jz_stride, double* jp, int jp_stride) const;
 
   // The Huber robustifier psi and its derivative (exposed for tests).
-  static double Psi(double s, double k, double* d_psi);
+  static double Psi(double s, double k, double* d_psi) {
+    const double a = std::abs(s);
+    if (a <= k) {
+      if (d_psi) *d_psi = 1.0;
+      return s;
+    }
+    const double root = std::sqrt(2.0 * k * a - k * k);
+    if (d_psi) *d_psi = k / root;
+    return s > 0.0 ? root : -root;
+  }
 
  private:
   // Distance from o along the object-frame viewing ray u to the surface:
@@ -129,11 +139,7 @@ class CompressedSdfCost : public ceres::CostFunction {
                 double** jacobians) const override;
 
  private:
-  CompressedSdfCost(const ShapeLookup* lookup,
-                    const std::pair<std::vector<Eigen::Vector3d>, std::vector<double>>& sorted,
-                    const SdfCostOptions& options);
-
-  SdfCost full_;  // on the points in Morton order (locality of the lookups)
+  SdfCost full_;
   int num_components_;
 };
 

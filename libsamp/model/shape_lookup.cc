@@ -73,7 +73,7 @@ inline double Interpolate(const Cell& cell, const double* c, double inv_voxel, d
 
 // d phi / dz = sum_k w_k W_k over the 8 corners; kR > 0 fixes R at compile time.
 template <int kR>
-inline void CodeGradient(const Cell& cell, const double* components, int num_components, double* d_z) {
+inline void CodeGradient(const Cell& cell, const float* components, int num_components, double* d_z) {
   const int nr = kR > 0 ? kR : num_components;
   const double fx = cell.f[0], fy = cell.f[1], fz = cell.f[2];
   const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
@@ -83,15 +83,15 @@ inline void CodeGradient(const Cell& cell, const double* components, int num_com
   double* out = kR > 0 ? acc : d_z;
   for (int r = 0; r < nr; ++r) out[r] = 0.0;
   for (int k = 0; k < 8; ++k) {
-    const double* row = components + size_t(cell.index[k]) * nr;
-    for (int r = 0; r < nr; ++r) out[r] += w[k] * row[r];
+    const float* row = components + size_t(cell.index[k]) * nr;
+    for (int r = 0; r < nr; ++r) out[r] += w[k] * double(row[r]);
   }
   if (kR > 0) {
     for (int r = 0; r < nr; ++r) d_z[r] = out[r];
   }
 }
 
-inline void CodeGradientAnyR(const Cell& cell, const double* components, int num_components, double* d_z) {
+inline void CodeGradientAnyR(const Cell& cell, const float* components, int num_components, double* d_z) {
   switch (num_components) {
     case 5: return CodeGradient<5>(cell, components, 5, d_z);
     case 10: return CodeGradient<10>(cell, components, 10, d_z);
@@ -133,7 +133,7 @@ ShapeLookup::ShapeLookup(const ShapeModel& model)
   components_.resize(size_t(d) * num_components_);
   for (int64_t v = 0; v < d; ++v) {
     mean_[size_t(v)] = model.mean[v];
-    double* row = &components_[size_t(v) * num_components_];
+    float* row = &components_[size_t(v) * num_components_];
     for (int r = 0; r < num_components_; ++r) row[r] = model.components(v, r);
   }
   sigmas_ = model.eigenvalues.cwiseSqrt();
@@ -147,9 +147,9 @@ double ShapeLookup::Evaluate(const double* z, const double* point, double* d_poi
   if (!Locate(grid_, max_corner_, inv_voxel_, point, &cell)) return NaNResult(num_components_, d_point, d_z);
   double c[8];
   for (int k = 0; k < 8; ++k) {
-    const double* row = &components_[size_t(cell.index[k]) * num_components_];
+    const float* row = &components_[size_t(cell.index[k]) * num_components_];
     double s = mean_[size_t(cell.index[k])];
-    for (int r = 0; r < num_components_; ++r) s += row[r] * z[r];
+    for (int r = 0; r < num_components_; ++r) s += double(row[r]) * z[r];
     c[k] = s;
   }
   if (d_z) CodeGradientAnyR(cell, components_.data(), num_components_, d_z);
@@ -177,9 +177,9 @@ const double* ShapeLookup::DenseCached(const double* z) const {
   cache.code.assign(z, z + nr);
   cache.phi.resize(d);
   for (size_t v = 0; v < d; ++v) {
-    const double* row = &components_[v * nr];
+    const float* row = &components_[v * nr];
     double s = mean_[v];
-    for (size_t r = 0; r < nr; ++r) s += row[r] * z[r];
+    for (size_t r = 0; r < nr; ++r) s += double(row[r]) * z[r];
     cache.phi[v] = s;
   }
   cache.owner = id_;

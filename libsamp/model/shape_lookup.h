@@ -1,7 +1,7 @@
 // Fast trilinear lookups of phi_z = W z + mu for the fitter's cost functions.
 // The model's components are re-laid out once, voxel-major (W_1 .. W_R
-// contiguous per voxel, doubles), so that d phi / dz reads 8 contiguous rows
-// of R numbers. Two ways to get the value:
+// contiguous per voxel, floats as in the model), so that d phi / dz reads 8
+// contiguous rows of R numbers. Two ways to get the value:
 //  - Evaluate(z, ..): the 8 corner values mu_c + W_c z, ~8 (R + 1) multiply-adds;
 //  - EvaluateDense(phi, ..) on phi_z sampled on the whole grid once
 //    (DenseCached(z)): 8 reads. The fitter evaluates ~10^5 points per code,
@@ -62,8 +62,8 @@ class ShapeLookup {
   GridSpec grid_;
   int num_components_ = 0;
   uint64_t id_ = 0;                  // tags this lookup's entries in the per-thread cache
-  std::vector<double> mean_;         // D
-  std::vector<double> components_;   // D x R, voxel-major
+  std::vector<float> mean_;          // D (the model's floats: nothing is lost)
+  std::vector<float> components_;    // D x R, voxel-major
   Eigen::VectorXd sigmas_;
   Eigen::Vector3d max_corner_;
   double inv_voxel_ = 1.0;

@@ -4,6 +4,7 @@
 //                             blocks compressed to R + 5 rows, the default)
 //   BM_Fit/em:1/compressed:1  with the hard-EM pass (re-association + second solve)
 //   BM_Fit/.../compressed:0   the per-frame blocks with N rows
+//   BM_Fit/.../ray:1          the data term along the viewing ray (--ray-depth-inside)
 //   BM_FitLinearSolver/<solver>  the single solve with other linear solvers
 //   BM_FitAutodiffPerPoint       the same single solve with one autodiff
 //                                cost block per point (for comparison)
@@ -62,14 +63,17 @@ void BM_Fit(benchmark::State& state) {
   FitOptions options;
   options.em_iterations = int(state.range(0));
   options.compress_data_blocks = state.range(1) != 0;
+  options.ray_depth_inside = state.range(2) != 0;
   RunFit(state, options);
 }
 BENCHMARK(BM_Fit)
-    ->ArgNames({"em", "compressed"})
-    ->Args({0, 1})
-    ->Args({1, 1})
-    ->Args({0, 0})
-    ->Args({1, 0})
+    ->ArgNames({"em", "compressed", "ray"})
+    ->Args({0, 1, 0})
+    ->Args({1, 1, 0})
+    ->Args({0, 0, 0})
+    ->Args({1, 0, 0})
+    ->Args({0, 1, 1})
+    ->Args({1, 1, 1})
     ->Unit(benchmark::kMillisecond);
 
 void BM_FitLinearSolver(benchmark::State& state) {
