@@ -4,8 +4,9 @@
 #   2. fetch the real CAD cars from Debian (torcs-data, trigger-rally-data) into a cache,
 #   3. inspect the shipped model (models/samp_cars_r5.vdb): summary, eigen-shape meshes and pictures,
 #   4. leave-out run: train a model without the evaluation cars, synthesize stereo sequences
-#      of the held-out cars, fit them (full method and single-frame), evaluate against the
-#      ground truth (tables and plots).
+#      of the held-out cars, fit them (full method with the paper's data term and with the
+#      ray-distance data term, and single-frame), evaluate against the ground truth (tables
+#      and plots).
 # Usage: tools/demo.sh [OUT_DIR]   (default: $SAMP_DATA_DIR/demo or ~/.cache/samp/demo;
 #        it must lie outside the repository). Set DEMO_SEQUENCES (default 2) for a larger run.
 set -euo pipefail
@@ -33,5 +34,6 @@ bash "$root/tools/run_benchmark.sh" --samp "$samp" --cad "$data/cad/cars" --work
 echo
 echo "samp demo: outputs in $out"
 echo "  model_summary.txt, eigen_shapes/*.ply, pictures/*.png"
-echo "  benchmark/sequences (synthetic stereo + ground truth), benchmark/fit_full, benchmark/fit_single"
+echo "  benchmark/sequences (synthetic stereo + ground truth), benchmark/fit_full, benchmark/fit_full_ray,"
+echo "  benchmark/fit_single"
 echo "  benchmark/eval/results.md and *.png (accuracy/completeness/F1 vs tau, pose error vs distance)"
