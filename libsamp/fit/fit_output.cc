@@ -167,6 +167,7 @@ nlohmann::json FitOptionsToJson(const FitOptions& o) {
                        {"sigma_speed", o.motion_noise.sigma_speed},
                        {"sigma_yaw_rate", o.motion_noise.sigma_yaw_rate}};
   j["max_iterations"] = o.max_iterations;
+  j["max_rejected_steps"] = o.max_rejected_steps;
   j["function_tolerance"] = o.function_tolerance;
   j["gradient_tolerance"] = o.gradient_tolerance;
   j["parameter_tolerance"] = o.parameter_tolerance;

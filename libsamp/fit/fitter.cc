@@ -151,6 +151,7 @@ bool FitOptions::Check() const {
       << "FitOptions.straight_yaw_rate must be >= 0";
   motion_noise.Check();
   SAMP_CHECK(max_iterations >= 1) << "FitOptions.max_iterations must be >= 1";
+  SAMP_CHECK(max_rejected_steps >= 0) << "FitOptions.max_rejected_steps must be >= 0";
   SAMP_CHECK(function_tolerance >= 0 && gradient_tolerance >= 0 && parameter_tolerance >= 0)
       << "FitOptions tolerances must be >= 0";
   ceres::LinearSolverType type;
@@ -308,6 +309,23 @@ struct FitState {
   std::vector<std::string> models;
 };
 
+// Ends a solve after this many consecutive rejected LM steps: the cost sits
+// at a kink of the residuals (with the ray-distance data term, rays that
+// switch between meeting and missing the surface make the cost jump by
+// ~1e-3 for any step), where shrinking the trust region gains nothing.
+class StopAfterRejectedSteps : public ceres::IterationCallback {
+ public:
+  explicit StopAfterRejectedSteps(int max_rejected) : max_rejected_(max_rejected) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    rejected_ = summary.iteration > 0 && !summary.step_is_successful ? rejected_ + 1 : 0;
+    return rejected_ >= max_rejected_ ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  int max_rejected_;
+  int rejected_ = 0;
+};
+
 SdfCostOptions DataTermOptions(const TrackFrame& f, const FitOptions& options, double weight) {
   SdfCostOptions o;
   o.huber_threshold = options.huber_threshold;
@@ -380,6 +398,8 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
   solver_options.num_threads = options.num_threads;
   solver_options.logging_type = ceres::SILENT;
   solver_options.minimizer_progress_to_stdout = false;
+  StopAfterRejectedSteps stop(options.max_rejected_steps);
+  if (options.max_rejected_steps > 0) solver_options.callbacks.push_back(&stop);
   ceres::Solver::Summary summary;
   const auto start = std::chrono::steady_clock::now();
   ceres::Solve(solver_options, &problem, &summary);

@@ -61,6 +61,10 @@ struct FitOptions {
   // Ceres: iterations per solve, tolerances, linear solver
   // ("sparse_normal_cholesky", "dense_schur", "iterative_schur", "dense_qr").
   int max_iterations = 50;
+  // End a solve after this many consecutive rejected steps (0 = never): the
+  // cost is then at a kink of the residuals (ray distance: rays switching
+  // between meeting and missing the surface).
+  int max_rejected_steps = 3;
   double function_tolerance = 1e-6;
   double gradient_tolerance = 1e-10;
   double parameter_tolerance = 1e-8;

@@ -142,19 +142,18 @@ bool SdfCost::RayDistance(const double* phi_z, const double* o, double phi_o, co
     if (!std::isfinite(phi_hi)) return false;
   }
   if (same_side(phi_hi)) return false;
-  // Secant in the bracket [lo, hi], then Newton steps kept inside it.
+  // Secant in the bracket [lo, hi], then Newton steps kept inside it until
+  // |phi| is negligible; c and g_c are those of the final distance.
   double d = lo + (hi - lo) * phi_lo / (phi_lo - phi_hi);
-  for (int k = 0; k < kNewtonSteps; ++k) {
-    double g[3];
+  const double tolerance = 1e-9 * lookup_->grid().voxel_size;
+  for (int k = 0;; ++k) {
     at(d, c);
-    const double v = lookup_->EvaluateDense(phi_z, c, g, nullptr);
-    const double slope = sign * (g[0] * u[0] + g[1] * u[1] + g[2] * u[2]);  // d phi / d distance
-    if (slope == 0.0 || !std::isfinite(slope)) break;
+    const double v = lookup_->EvaluateDense(phi_z, c, g_c, nullptr);
+    const double slope = sign * (g_c[0] * u[0] + g_c[1] * u[1] + g_c[2] * u[2]);  // d phi / d distance
+    if (k == kNewtonSteps || std::abs(v) <= tolerance || slope == 0.0 || !std::isfinite(slope)) break;
     d = std::min(std::max(d - v / slope, lo), hi);
   }
   if (d > limit) return false;
-  at(d, c);
-  lookup_->EvaluateDense(phi_z, c, g_c, nullptr);
   // A crossing at a grazing angle (or none after all) counts as a miss.
   if (!(g_c[0] * u[0] + g_c[1] * u[1] + g_c[2] * u[2] < -kMinRaySlope)) return false;
   *distance = d;
