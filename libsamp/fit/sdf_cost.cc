@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 
 #include "libsamp/core/error.h"
 
@@ -172,36 +173,43 @@ CompressedSdfCost::CompressedSdfCost(const ShapeLookup* lookup,
 
 bool CompressedSdfCost::Evaluate(double const* const* parameters, double* residuals,
                                  double** jacobians) const {
+  const int nr = num_components_, m = nr + 4;
+  std::lock_guard<std::mutex> lock(cache_mutex_);
+  const bool hit = cache_valid_ && std::equal(parameters[0], parameters[0] + nr, cache_parameters_.begin()) &&
+                   std::equal(parameters[1], parameters[1] + 4, cache_parameters_.begin() + nr);
+  if (!hit) {
+    cache_valid_ = false;
+    cache_parameters_.assign(parameters[0], parameters[0] + nr);
+    cache_parameters_.insert(cache_parameters_.end(), parameters[1], parameters[1] + 4);
+    cache_residuals_.resize(size_t(m) + 1);
+    cache_jz_.resize(size_t(m + 1) * nr);
+    cache_jp_.resize(size_t(m + 1) * 4);
+    if (!Linearize(parameters[0], parameters[1])) return false;
+    cache_valid_ = true;
+  }
+  std::copy(cache_residuals_.begin(), cache_residuals_.end(), residuals);
+  if (jacobians && jacobians[0]) std::copy(cache_jz_.begin(), cache_jz_.end(), jacobians[0]);
+  if (jacobians && jacobians[1]) std::copy(cache_jp_.begin(), cache_jp_.end(), jacobians[1]);
+  return true;
+}
+
+bool CompressedSdfCost::Linearize(const double* z, const double* pose) const {
   using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const int n = full_.num_residuals();
   const int nr = num_components_, m = nr + 4;
   // The points in chunks whose rows stay in the L1/L2 cache: J^T J, J^T r
   // and |r|^2 are accumulated chunk by chunk (per-thread scratch).
+  // J = [d/dz | d/dpose], one row per point.
   constexpr int kChunk = 256;
   thread_local std::vector<double> r_buffer, j_buffer;
   r_buffer.resize(kChunk);
-  const bool need_jacobians = jacobians && (jacobians[0] || jacobians[1]);
-  double squared_norm = 0.0;
-  if (!need_jacobians) {
-    for (int begin = 0; begin < n; begin += kChunk) {
-      const int end = std::min(n, begin + kChunk);
-      if (!full_.EvaluateRows(parameters[0], parameters[1], begin, end, r_buffer.data(), nullptr, 0, nullptr, 0)) {
-        return false;
-      }
-      for (int i = 0; i < end - begin; ++i) squared_norm += r_buffer[size_t(i)] * r_buffer[size_t(i)];
-    }
-    for (int k = 0; k < m; ++k) residuals[k] = 0.0;
-    residuals[m] = std::sqrt(squared_norm);
-    return true;
-  }
-  // J = [d/dz | d/dpose], one row per point.
   j_buffer.resize(size_t(kChunk) * m);
   Eigen::MatrixXd h = Eigen::MatrixXd::Zero(m, m);
   Eigen::VectorXd g = Eigen::VectorXd::Zero(m);
+  double squared_norm = 0.0;
   for (int begin = 0; begin < n; begin += kChunk) {
     const int end = std::min(n, begin + kChunk), rows = end - begin;
-    if (!full_.EvaluateRows(parameters[0], parameters[1], begin, end, r_buffer.data(), j_buffer.data(), m,
-                            j_buffer.data() + nr, m)) {
+    if (!full_.EvaluateRows(z, pose, begin, end, r_buffer.data(), j_buffer.data(), m, j_buffer.data() + nr, m)) {
       return false;
     }
     const Eigen::Map<const Eigen::VectorXd> r(r_buffer.data(), rows);
@@ -215,20 +223,15 @@ bool CompressedSdfCost::Evaluate(double const* const* parameters, double* residu
   Eigen::LLT<Eigen::MatrixXd, Eigen::Lower> llt(h);
   if (llt.info() != Eigen::Success) return false;
   const Eigen::VectorXd rc = llt.matrixL().solve(g);
-  for (int k = 0; k < m; ++k) residuals[k] = rc[k];
-  residuals[m] = std::sqrt(std::max(0.0, squared_norm - rc.squaredNorm()));
-  const RowMatrix lt = llt.matrixL().transpose();  // m x m, upper
+  for (int k = 0; k < m; ++k) cache_residuals_[size_t(k)] = rc[k];
+  cache_residuals_[size_t(m)] = std::sqrt(std::max(0.0, squared_norm - rc.squaredNorm()));
   // Row k of the compressed Jacobian = row k of L^T; last row zero.
-  if (jacobians[0]) {
-    Eigen::Map<RowMatrix> out(jacobians[0], m + 1, nr);
-    out.topRows(m) = lt.leftCols(nr);
-    out.row(m).setZero();
-  }
-  if (jacobians[1]) {
-    Eigen::Map<RowMatrix> out(jacobians[1], m + 1, 4);
-    out.topRows(m) = lt.rightCols(4);
-    out.row(m).setZero();
-  }
+  const RowMatrix lt = llt.matrixL().transpose();  // m x m, upper
+  Eigen::Map<RowMatrix> jz(cache_jz_.data(), m + 1, nr), jp(cache_jp_.data(), m + 1, 4);
+  jz.topRows(m) = lt.leftCols(nr);
+  jz.row(m).setZero();
+  jp.topRows(m) = lt.rightCols(4);
+  jp.row(m).setZero();
   return true;
 }
 

@@ -37,6 +37,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <mutex>
 #include <vector>
 
 #include "libsamp/model/shape_lookup.h"
@@ -117,10 +118,14 @@ class SdfCost : public ceres::CostFunction {
 // gradient), Jacobian^T Jacobian = H (the Gauss-Newton matrix), and
 // |Jacobian d + residuals|^2 = |J d + r|^2 for every step d, so
 // Levenberg-Marquardt takes exactly the steps of the uncompressed problem.
-// A cost-only evaluation (no Jacobians requested) returns (0, .., 0, |r|).
 // The returned Jacobian is NOT the derivative of the returned residuals
 // (those depend on the linearisation point); tests compare cost, gradient
 // and J^T J with SdfCost instead of numeric differentiation.
+// Eager linearisation: every evaluation, also a cost-only one, computes the
+// Jacobian and keeps the result for its parameters. Levenberg-Marquardt
+// evaluates the cost of each trial step and then, when the step is accepted
+// (almost always with this data term), the Jacobian at the same parameters:
+// that second call is a copy. One Evaluate at a time per block (a mutex).
 class CompressedSdfCost : public ceres::CostFunction {
  public:
   CompressedSdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
@@ -139,8 +144,16 @@ class CompressedSdfCost : public ceres::CostFunction {
                 double** jacobians) const override;
 
  private:
+  // Residuals and Jacobians at (z, pose) into the cache; false when not finite.
+  bool Linearize(const double* z, const double* pose) const;
+
   SdfCost full_;
   int num_components_;
+  mutable std::mutex cache_mutex_;
+  mutable bool cache_valid_ = false;
+  mutable std::vector<double> cache_parameters_;  // z, then pose
+  mutable std::vector<double> cache_residuals_;   // R + 5
+  mutable std::vector<double> cache_jz_, cache_jp_;  // (R + 5) x R, (R + 5) x 4, row-major
 };
 
 }  // namespace samp

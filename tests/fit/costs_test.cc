@@ -265,6 +265,50 @@ TEST(CompressedSdfCost, SameCostGradientAndGaussNewtonMatrix) {
   }
 }
 
+TEST(CompressedSdfCost, CachedLinearisationFollowsTheParameters) {
+  // Every evaluation linearises and keeps the result for its parameters: a
+  // cost-only call followed by a Jacobian call at the same parameters, and
+  // calls alternating between parameters, must give what a fresh block gives.
+  const ShapeLookup& lookup = Lookup();
+  std::mt19937 rng(9);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const auto surface = testing::SampleSurface(lookup, 0.5 * lookup.sigmas(), 200, &rng);
+  const Eigen::Isometry3d world_from_object = WorldFromObject(Eigen::Vector3d(3, 1.6, 12), 0.3);
+  std::vector<Eigen::Vector3d> points;
+  for (const auto& p : surface) points.push_back(world_from_object * (p + 0.05 * Eigen::Vector3d(n(rng), n(rng), n(rng))));
+  const std::vector<double> sigmas(points.size(), 0.1);
+  using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  struct Result {
+    Eigen::VectorXd r = Eigen::VectorXd(10);
+    RowMatrix jz = RowMatrix(10, 5), jp = RowMatrix(10, 4);
+  };
+  auto evaluate = [](const CompressedSdfCost& cost, const Eigen::VectorXd& z, const double* pose, bool jacobians) {
+    Result out;
+    const double* params[2] = {z.data(), pose};
+    double* j[2] = {out.jz.data(), out.jp.data()};
+    EXPECT_TRUE(cost.Evaluate(params, out.r.data(), jacobians ? j : nullptr));
+    return out;
+  };
+  const Eigen::VectorXd z1 = 0.2 * lookup.sigmas(), z2 = -0.1 * lookup.sigmas();
+  const double pose1[4] = {3.05, 1.6, 12.02, 0.31}, pose2[4] = {2.95, 1.62, 11.97, 0.28};
+  const CompressedSdfCost fresh1(&lookup, points, sigmas, 1.0, 0.5), fresh2(&lookup, points, sigmas, 1.0, 0.5);
+  const Result expected1 = evaluate(fresh1, z1, pose1, true), expected2 = evaluate(fresh2, z2, pose2, true);
+  const CompressedSdfCost cost(&lookup, points, sigmas, 1.0, 0.5);
+  const Result cost_only = evaluate(cost, z1, pose1, false);
+  EXPECT_EQ(cost_only.r, expected1.r);
+  const Result with_jacobians = evaluate(cost, z1, pose1, true);
+  EXPECT_EQ(with_jacobians.r, expected1.r);
+  EXPECT_EQ(with_jacobians.jz, expected1.jz);
+  EXPECT_EQ(with_jacobians.jp, expected1.jp);
+  const Result other = evaluate(cost, z2, pose2, true);
+  EXPECT_EQ(other.r, expected2.r);
+  EXPECT_EQ(other.jp, expected2.jp);
+  EXPECT_NE(other.r, expected1.r);
+  const double pose1_moved[4] = {pose1[0], pose1[1], pose1[2], pose1[3] + 1e-9};
+  EXPECT_NE(evaluate(cost, z1, pose1_moved, false).r, expected1.r) << "a changed pose must not hit the cache";
+  EXPECT_EQ(evaluate(cost, z1, pose1, true).jz, expected1.jz);
+}
+
 TEST(SdfCost, RejectsBadInput) {
   const ShapeLookup& lookup = Lookup();
   EXPECT_THROW(SdfCost(&lookup, {}, {}, 1.0, 1.0), Error);
