@@ -33,14 +33,6 @@ SdfCost::SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& 
   SAMP_CHECK(options.camera_in_world.allFinite()) << "SdfCost: camera centre is not finite";
   const size_t n = points_in_world.size();
   sqrt_weight_ = std::sqrt(options.weight / double(n));
-  if (options.ray_depth_inside) {
-    rays_.resize(3 * n);
-    for (size_t i = 0; i < n; ++i) {
-      const Eigen::Vector3d ray = points_in_world[i] - options.camera_in_world;
-      SAMP_CHECK(ray.norm() > 0.0) << "SdfCost: point " << i << " is at the camera centre";
-      for (int a = 0; a < 3; ++a) rays_[3 * i + a] = ray[a] / ray.norm();
-    }
-  }
   points_.resize(3 * n);
   inv_sigmas_.resize(n);
   for (size_t i = 0; i < n; ++i) {
@@ -49,6 +41,14 @@ SdfCost::SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& 
         << "SdfCost: sigma of point " << i << " must be > 0, got " << sigmas[i];
     for (int a = 0; a < 3; ++a) points_[3 * i + a] = points_in_world[i][a];
     inv_sigmas_[i] = 1.0 / sigmas[i];
+  }
+  if (options.ray_depth_inside) {
+    rays_.resize(3 * n);
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d ray = points_in_world[i] - options.camera_in_world;
+      SAMP_CHECK(ray.norm() > 0.0) << "SdfCost: point " << i << " is at the camera centre";
+      for (int a = 0; a < 3; ++a) rays_[3 * i + a] = ray[a] / ray.norm();
+    }
   }
   set_num_residuals(int(n));
   mutable_parameter_block_sizes()->push_back(lookup->num_components());
