@@ -218,6 +218,65 @@ TEST(Inspect, EncodeTrainingAndHeldOutShapes) {
   EXPECT_THROW(EncodeShapes(model, options), Error);
 }
 
+TEST(Inspect, EncodeCadFile) {
+  // A manifold of car-sized boxes standing on the ground in the canonical
+  // frame (x length, y down with the bottom at y = 0, z width; exact box SDFs),
+  // and a CAD box of a training size written as OBJ elsewhere, y up: encoding
+  // loads it with assimp, canonicalises it, scans it with Embree, computes its
+  // SDF on the model grid and projects it.
+  const GridSpec grid = GridSpec::FromBox(Eigen::Vector3d(-2.6, -2.0, -1.3), Eigen::Vector3d(2.6, 0.4, 1.3), 0.1);
+  const std::vector<Eigen::Vector3d> sizes = {{3.8, 1.4, 1.7}, {4.0, 1.6, 1.75}, {4.2, 1.5, 1.8},
+                                              {4.4, 1.45, 1.9}, {4.6, 1.55, 1.85}};
+  Eigen::MatrixXf samples(grid.NumVoxels(), Eigen::Index(sizes.size()));
+  for (size_t n = 0; n < sizes.size(); ++n) {
+    const Eigen::Vector3d half = 0.5 * sizes[n];
+    for (int k = 0; k < grid.dims.z(); ++k)
+      for (int j = 0; j < grid.dims.y(); ++j)
+        for (int i = 0; i < grid.dims.x(); ++i) {
+          const Eigen::Vector3d p = grid.Position(i, j, k) - Eigen::Vector3d(0, -half.y(), 0);
+          const Eigen::Vector3d q = p.cwiseAbs() - half;
+          const double sdf = q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+          samples(grid.Index(i, j, k), Eigen::Index(n)) = float(sdf);
+        }
+  }
+  PcaOptions pca_options;
+  pca_options.num_components = 3;
+  const PcaResult pca = ComputePca(samples, pca_options);
+  ShapeModel model;
+  model.grid = grid;
+  model.mean = pca.mean;
+  model.components = pca.components;
+  model.eigenvalues = pca.eigenvalues;
+  model.total_variance = pca.total_variance;
+  for (size_t n = 0; n < sizes.size(); ++n) model.training_shapes.push_back("box_" + std::to_string(n));
+  model.Check();
+
+  TempFolder folder("encode_cad");
+  const std::string cad = (folder / "box.obj").string();
+  ExportMesh(cad, MakeBoxMesh(Eigen::Vector3d(3.0, 2.0, -1.0), Eigen::Vector3d(7.2, 3.5, 0.8)));
+  EncodeOptions options;
+  options.input = cad;
+  options.output_folder = (folder / "out").string();
+  const EncodeSummary summary = EncodeShapes(model, options);
+  ASSERT_EQ(summary.shapes.size(), 1u);
+  const EncodedShape& box = summary.shapes[0];
+  ASSERT_TRUE(box.ok) << box.error;
+  EXPECT_EQ(box.kind, "cad");
+  EXPECT_EQ(box.name, "box");
+  // The code is that of the training box of the same size.
+  const Eigen::VectorXf x = samples.col(2);
+  const Eigen::VectorXd expected = ProjectToManifold(model, std::vector<float>(x.data(), x.data() + x.size()));
+  ASSERT_EQ(box.code.size(), 3);
+  for (int r = 0; r < 3; ++r) {
+    EXPECT_NEAR(box.code[r], expected[r], 0.1 * std::sqrt(model.eigenvalues[0])) << summary.BriefReport();
+  }
+  EXPECT_LT(box.rms_near_surface, 0.05) << summary.BriefReport();
+  EXPECT_LT(box.accuracy.mean, 0.05) << summary.BriefReport();
+  EXPECT_LT(box.completeness.mean, 0.05) << summary.BriefReport();
+  ASSERT_TRUE(fs::exists(box.mesh_path));
+  EXPECT_FALSE(LoadMesh(box.mesh_path).Empty());
+}
+
 TEST(Inspect, NearestDistances) {
   const std::vector<Eigen::Vector3f> to = {{0, 0, 0}, {1, 0, 0}, {0, 2, 0}};
   const std::vector<Eigen::Vector3f> from = {{0.1f, 0, 0}, {1, 0.5f, 0}, {5, 5, 5}, {-3, 0, 0}};
