@@ -132,6 +132,7 @@ nlohmann::json TrackFitToJson(const TrackFit& fit, const AlignedBox& box) {
                       {"final_cost", r.final_cost},
                       {"num_iterations", r.num_iterations},
                       {"seconds", r.seconds},
+                      {"median_step_seconds", r.median_step_seconds},
                       {"usable", r.usable},
                       {"num_points", r.num_points},
                       {"termination", r.termination}});

@@ -407,6 +407,11 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
   report.initial_cost = summary.initial_cost;
   report.final_cost = summary.final_cost;
   report.num_iterations = summary.num_successful_steps + summary.num_unsuccessful_steps;
+  std::vector<double> step_seconds;  // iterations[0] is the initial evaluation, not a step
+  for (size_t k = 1; k < summary.iterations.size(); ++k) {
+    step_seconds.push_back(summary.iterations[k].iteration_time_in_seconds);
+  }
+  report.median_step_seconds = Median(step_seconds);
   report.usable = summary.IsSolutionUsable();
   report.termination = std::string(ceres::TerminationTypeToString(summary.termination_type)) + ": " +
                        summary.message;

@@ -83,7 +83,8 @@ struct SolveReport {
   double initial_cost = 0.0;  // Ceres cost (1/2 E) before and after
   double final_cost = 0.0;
   int num_iterations = 0;     // LM iterations (successful + unsuccessful)
-  double seconds = 0.0;
+  double seconds = 0.0;       // wall time of ceres::Solve (set-up, initial evaluation, steps)
+  double median_step_seconds = 0.0;  // median Ceres iteration time over the LM steps (0 if none)
   bool usable = false;        // ceres::Solver::Summary::IsSolutionUsable()
   std::string termination;    // Ceres' termination type and message
   int num_points = 0;         // data points in the problem
