@@ -60,6 +60,24 @@ std::vector<float> ShapeSdf(const GridSpec& grid, double radius, double stretch 
   return values;
 }
 
+// A model from training SDFs (one column each) by the model layer's PCA with
+// R components; training shapes named prefix0, prefix1, ...
+ShapeModel ModelFromSamples(const GridSpec& grid, const Eigen::MatrixXf& samples, int num_components,
+                            const std::string& prefix) {
+  PcaOptions pca_options;
+  pca_options.num_components = num_components;
+  const PcaResult pca = ComputePca(samples, pca_options);
+  ShapeModel model;
+  model.grid = grid;
+  model.mean = pca.mean;
+  model.components = pca.components;
+  model.eigenvalues = pca.eigenvalues;
+  model.total_variance = pca.total_variance;
+  for (Eigen::Index n = 0; n < samples.cols(); ++n) model.training_shapes.push_back(prefix + std::to_string(n));
+  model.Check();
+  return model;
+}
+
 // A manifold of concentric spheres (radii 0.4 ... 0.7) built in memory with the
 // model layer's PCA; R = 1 (the centred SDFs span one direction).
 ShapeModel SphereModel(std::vector<std::vector<float>>* sdfs, std::vector<double>* radii) {
@@ -71,18 +89,8 @@ ShapeModel SphereModel(std::vector<std::vector<float>>* sdfs, std::vector<double
     sdfs->push_back(ShapeSdf(grid, (*radii)[n]));
     samples.col(n) = Eigen::Map<const Eigen::VectorXf>(sdfs->back().data(), grid.NumVoxels());
   }
-  PcaOptions pca_options;
-  pca_options.num_components = 1;
-  const PcaResult pca = ComputePca(samples, pca_options);
-  ShapeModel model;
-  model.grid = grid;
-  model.mean = pca.mean;
-  model.components = pca.components;
-  model.eigenvalues = pca.eigenvalues;
-  model.total_variance = pca.total_variance;
-  for (size_t n = 0; n < radii->size(); ++n) model.training_shapes.push_back("sphere_" + std::to_string(n));
+  ShapeModel model = ModelFromSamples(grid, samples, 1, "sphere_");
   model.options_json = R"({"pca": {"num_components": 1}, "note": "spheres"})";
-  model.Check();
   return model;
 }
 
@@ -97,18 +105,7 @@ ShapeModel EllipsoidModel(std::vector<std::vector<float>>* sdfs) {
     sdfs->push_back(ShapeSdf(grid, params[n].first, params[n].second));
     samples.col(n) = Eigen::Map<const Eigen::VectorXf>(sdfs->back().data(), grid.NumVoxels());
   }
-  PcaOptions pca_options;
-  pca_options.num_components = 3;
-  const PcaResult pca = ComputePca(samples, pca_options);
-  ShapeModel model;
-  model.grid = grid;
-  model.mean = pca.mean;
-  model.components = pca.components;
-  model.eigenvalues = pca.eigenvalues;
-  model.total_variance = pca.total_variance;
-  for (size_t n = 0; n < params.size(); ++n) model.training_shapes.push_back("blob_" + std::to_string(n));
-  model.Check();
-  return model;
+  return ModelFromSamples(grid, samples, 3, "blob_");
 }
 
 void WriteSdf(const std::string& path, const GridSpec& grid, const std::vector<float>& sdf,
@@ -239,17 +236,7 @@ TEST(Inspect, EncodeCadFile) {
           samples(grid.Index(i, j, k), Eigen::Index(n)) = float(sdf);
         }
   }
-  PcaOptions pca_options;
-  pca_options.num_components = 3;
-  const PcaResult pca = ComputePca(samples, pca_options);
-  ShapeModel model;
-  model.grid = grid;
-  model.mean = pca.mean;
-  model.components = pca.components;
-  model.eigenvalues = pca.eigenvalues;
-  model.total_variance = pca.total_variance;
-  for (size_t n = 0; n < sizes.size(); ++n) model.training_shapes.push_back("box_" + std::to_string(n));
-  model.Check();
+  const ShapeModel model = ModelFromSamples(grid, samples, 3, "box_");
 
   TempFolder folder("encode_cad");
   const std::string cad = (folder / "box.obj").string();
