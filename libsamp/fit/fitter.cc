@@ -98,8 +98,6 @@ void CheckTrack(const Track& track, const FitOptions& options) {
   const std::string name = "track " + std::to_string(track.id) +
                            (track.sequence.empty() ? "" : " of sequence " + track.sequence);
   SAMP_CHECK(!track.frames.empty()) << name << " has no frames";
-  SAMP_CHECK(options.single_frame || track.frames.size() >= 2)
-      << name << " has only one frame (the joint fit needs >= 2; use single-frame mode)";
   for (size_t k = 0; k < track.frames.size(); ++k) {
     const TrackFrame& f = track.frames[k];
     SAMP_CHECK(f.candidate_points_in_world.size() == f.candidate_sigmas.size())
@@ -370,7 +368,9 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
     }
     problem.AddResidualBlock(GroundCost::Create(f.ground_plane_in_world, options.sigma_ground, frame_weight),
                              nullptr, pose);
-    if (single) continue;
+    // One frame (T = 1): no motion term and no velocities; the joint problem
+    // is then the single-frame problem.
+    if (single || num_frames == 1) continue;
     problem.AddParameterBlock(state->velocities[k].data(), 2);
     if (k == 0) {
       state->models[k] = "none";

@@ -133,9 +133,10 @@ class TrackFitter {
  public:
   TrackFitter(const ShapeModel& model, const FitOptions& options);
 
-  // Throws samp::Error naming the track on bad input (fewer than 2 frames in
-  // joint mode, non-increasing times, no frame with enough points, non-finite
-  // values). Non-convergence is reported in the summary, not thrown.
+  // Throws samp::Error naming the track on bad input (no frames,
+  // non-increasing times, no frame with enough points, non-finite values).
+  // A one-frame track is fitted in joint mode too (no motion term: the
+  // single-frame problem). Non-convergence is reported in the summary, not thrown.
   TrackFit Fit(const Track& track) const;
 
   const ShapeLookup& lookup() const { return lookup_; }

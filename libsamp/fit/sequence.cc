@@ -280,6 +280,17 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
                                << options.first_frame << ", " << options.last_frame << "]";
   result.num_frames = static_cast<int>(indices.size());
 
+  // A track cannot be longer than the sequence: in a sequence of fewer frames
+  // than min_track_length (e.g. one KITTI stereo frame) tracks of every frame
+  // are kept.
+  TrackerOptions tracker = options.tracker;
+  if (tracker.min_track_length > result.num_frames) {
+    tracker.min_track_length = result.num_frames;
+    result.messages.push_back(files.name + ": " + std::to_string(result.num_frames) +
+                              " frame(s), fewer than min_track_length " +
+                              std::to_string(options.tracker.min_track_length) +
+                              ": tracks of " + std::to_string(result.num_frames) + " frame(s) kept");
+  }
   std::vector<LinkedTrack> linked;
   if (options.tracking_labels_path.empty()) {
     std::vector<FrameDetections> detections;
@@ -290,7 +301,7 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
       fd.detections = reader.ReadDetections(i);
       detections.push_back(std::move(fd));
     }
-    linked = LinkDetections(detections, options.tracker, &result.tracking);
+    linked = LinkDetections(detections, tracker, &result.tracking);
   } else {
     std::vector<ObjectLabel> labels;
     for (const ObjectLabel& label : ReadTrackingLabels(options.tracking_labels_path)) {
@@ -301,7 +312,7 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
           << label.frame << ", which sequence " << directory << " does not have";
       labels.push_back(label);
     }
-    linked = TracksFromLabels(labels, options.tracker.min_track_length, &result.tracking);
+    linked = TracksFromLabels(labels, tracker.min_track_length, &result.tracking);
     result.tracks_from_labels = true;
   }
   if (result.tracking.num_short_tracks > 0)

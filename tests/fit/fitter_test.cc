@@ -6,9 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <random>
 
 #include "libsamp/core/error.h"
+#include "libsamp/fit/sequence.h"
+#include "libsamp/model/shape_model.h"
 #include "tests/fit/fit_test_util.h"
 
 namespace samp {
@@ -238,14 +242,37 @@ TEST(Fitter, RayDistanceRemovesThePullTowardsTheCameraUnderDepthNoise) {
   EXPECT_LT(std::abs(ray_error), 0.5 * std::abs(sdf_error));
 }
 
+TEST(Fitter, OneFrameTrackInJointModeIsTheSingleFrameProblem) {
+  // T = 1: no motion term, weights 1/T = 1, so the joint fit and the
+  // single-frame fit solve the same problem.
+  const ShapeLookup lookup(Model());
+  Synthetic s = MakeTrack(lookup, 3, 5.0, 0.0, 300, 14);
+  Track one = s.track;
+  one.frames.resize(1);
+  FitOptions options;
+  const TrackFit joint = TrackFitter(Model(), options).Fit(one);
+  options.single_frame = true;
+  const TrackFit single = TrackFitter(Model(), options).Fit(one);
+  ASSERT_EQ(joint.frames.size(), 1u);
+  ASSERT_EQ(single.frames.size(), 1u);
+  EXPECT_FALSE(joint.single_frame);
+  EXPECT_TRUE(joint.summary.usable) << joint.summary.BriefReport();
+  EXPECT_EQ(joint.frames[0].motion_model, "none");
+  EXPECT_GT(joint.frames[0].num_points, 100);
+  EXPECT_LT((joint.frames[0].position - s.poses_true[0].head<3>()).norm(), 0.15);
+  EXPECT_LT((joint.frames[0].position - single.frames[0].position).norm(), 1e-4);
+  EXPECT_LT(std::abs(WrapAngle(joint.frames[0].yaw - single.frames[0].yaw)), 1e-4);
+  EXPECT_LT((joint.shape_code - single.shape_code).cwiseQuotient(lookup.sigmas()).cwiseAbs().maxCoeff(), 1e-3);
+}
+
 TEST(Fitter, BadTracksThrowWithTheirName) {
   TrackFitter fitter(Model(), FitOptions());
   Synthetic s = MakeTrack(fitter.lookup(), 3, 5.0, 0.0, 50, 13);
-  Track one = s.track;
-  one.frames.resize(1);
+  Track none = s.track;
+  none.frames.clear();
   try {
-    fitter.Fit(one);
-    FAIL() << "one-frame track accepted";
+    fitter.Fit(none);
+    FAIL() << "track without frames accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("track 3"), std::string::npos) << e.what();
   }
@@ -261,6 +288,27 @@ TEST(Fitter, BadTracksThrowWithTheirName) {
   Track backwards = s.track;
   backwards.frames[2].time = 0.0;
   EXPECT_THROW(fitter.Fit(backwards), Error);
+}
+
+
+// The real KITTI frame in ../shared/kitti/000046 (one frame, one detected
+// car at ~13 m), when present: default options fit it in joint mode.
+TEST(FitterRealKitti, OneFrameTrackFitsWithDefaults) {
+  const char* env = std::getenv("SAMP_SHARED_DIR");
+  const std::string dir = std::string(env != nullptr ? env : SAMP_SHARED_DIR) + "/kitti/000046";
+  if (!std::filesystem::exists(dir)) GTEST_SKIP() << dir << " not present";
+  const std::vector<Track> tracks = LoadSequenceTracks(dir, SequenceOptions());
+  ASSERT_EQ(tracks.size(), 1u);
+  const ShapeModel model = ShapeModel::Load(SAMP_SHIPPED_MODEL);
+  const TrackFitter fitter(model, FitOptions());
+  const TrackFit fit = fitter.Fit(tracks[0]);
+  EXPECT_TRUE(fit.summary.usable) << fit.summary.BriefReport();
+  ASSERT_EQ(fit.frames.size(), 1u);
+  EXPECT_GT(fit.frames[0].num_points, 500);
+  // Within a metre of the detection (a real detector's box, ~13 m away).
+  const TrackFrame& f = tracks[0].frames[0];
+  const Eigen::Vector3d detection = f.world_from_camera * f.detection.position;
+  EXPECT_LT((fit.frames[0].position - detection).norm(), 1.0);
 }
 
 }  // namespace

@@ -92,6 +92,12 @@ void RegisterFitCommand(CLI::App* app) {
     if (summary.num_sequences_failed == int(summary.sequences.size())) {
       SAMP_THROW() << "every sequence failed";
     }
+    int num_detections = 0;
+    for (const auto& q : summary.sequences) num_detections += q.input.tracking.num_detections;
+    if (summary.num_tracks_fitted == 0 && num_detections > 0) {
+      SAMP_THROW() << "no track was fitted although the input had " << num_detections
+                   << " detection(s) (see the messages above)";
+    }
   });
 }
 
