@@ -70,7 +70,28 @@ void CanonicalizeOptions::Check() const {
   SAMP_CHECK(min_size.allFinite() && max_size.allFinite() && (min_size.array() >= 0).all() &&
              (min_size.array() <= max_size.array()).all())
       << "canonicalize: need 0 <= min_size <= max_size per component";
+  if (add_wheels) wheels.Check();
 }
+
+CanonicalizeOptions CanonicalPreset(const std::string& name) {
+  CanonicalizeOptions options;
+  if (name == "shapenet") {
+    options.up = "+y";
+    options.forward = "-z";
+    options.scale = 4.49;
+  } else if (name == "apollocar3d") {
+    options.up = "-y";
+    options.forward = "+z";
+    options.scale = 1.0;
+  } else {
+    std::string known;
+    for (const std::string& n : CanonicalPresetNames()) known += (known.empty() ? "" : ", ") + n;
+    SAMP_THROW() << "unknown canonicalisation preset '" << name << "' (known: " << known << ")";
+  }
+  return options;
+}
+
+std::vector<std::string> CanonicalPresetNames() { return {"shapenet", "apollocar3d"}; }
 
 CanonicalizeResult Canonicalize(const Mesh& cad_mesh, const CanonicalizeOptions& options) {
   options.Check();
@@ -175,6 +196,14 @@ CanonicalizeResult Canonicalize(const Mesh& cad_mesh, const CanonicalizeOptions&
 
   result.mesh = cad_mesh;
   result.mesh.Transform(result.object_from_cad);
+  if (options.add_wheels) {
+    WheeledCar car = AddWheels(result.mesh, options.wheels);
+    result.wheels = car.placement;
+    result.wheels_added = true;
+    result.mesh = car.Combined();
+    result.object_from_cad.pretranslate(Eigen::Vector3d(0.0, -car.placement.lift, 0.0));
+    result.size = result.mesh.Bounds().Size();
+  }
   return result;
 }
 
@@ -244,6 +273,20 @@ class ManifestParser {
       options->min_size = Vector3(value, field);
     } else if (key == "max_size") {
       options->max_size = Vector3(value, field);
+    } else if (key == "wheels") {
+      const std::string wheels = String(value, field);
+      if (wheels != "synthesise" && wheels != "mesh") {
+        Fail(field, "expected \"synthesise\" (add tyres under a body without wheels) or \"mesh\", got \"" +
+                        wheels + "\"");
+      }
+      options->add_wheels = wheels == "synthesise";
+    } else if (key == "ground_clearance") {
+      if (!value.is_number() || !(value.get<double>() >= 0.0) || !std::isfinite(value.get<double>())) {
+        Fail(field, "expected a number >= 0 (metres), got " + value.dump());
+      }
+      options->wheels.ground_clearance = value.get<double>();
+    } else if (key == "wheel_radius") {
+      options->wheels.radius = PositiveNumber(value, field);
     } else {
       return false;
     }
@@ -274,7 +317,7 @@ class ManifestParser {
           String(value, field);
         } else if (!CanonicalizeKey(key, value, field, &manifest.defaults)) {
           Fail(field, "unknown key (known: scale, target_length, up, forward, min_size, "
-                      "max_size, comment)");
+                      "max_size, wheels, ground_clearance, wheel_radius, comment)");
         }
       }
       CheckOptions(manifest.defaults, "defaults");
@@ -331,7 +374,7 @@ class ManifestParser {
         String(value, field);
       } else if (!CanonicalizeKey(key, value, field, &entry.canonicalize)) {
         Fail(field, "unknown key (known: file, name, scale, target_length, up, forward, "
-                    "min_size, max_size, skip, skip_reason, comment)");
+                    "min_size, max_size, wheels, ground_clearance, wheel_radius, skip, skip_reason, comment)");
       }
     }
     if (entry.name.empty()) entry.name = std::filesystem::path(entry.file).stem().string();

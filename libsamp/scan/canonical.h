@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "libsamp/core/mesh.h"
+#include "libsamp/core/wheels.h"
 
 namespace samp {
 
@@ -29,9 +30,25 @@ struct CanonicalizeOptions {
   // Plausible canonical size range for a car, metres (length, height, width).
   Eigen::Vector3d min_size = Eigen::Vector3d(2.5, 0.9, 1.2);
   Eigen::Vector3d max_size = Eigen::Vector3d(7.0, 2.8, 2.8);
+  // Bodies without wheels (TORCS, Trigger Rally): lift the body and add four
+  // tyres touching y = 0 (AddWheels, libsamp/core/wheels.h). Manifest key
+  // "wheels": "synthesise" (true) or "mesh" (false: the mesh has its own, or
+  // none are wanted).
+  bool add_wheels = false;
+  WheelOptions wheels;
 
   void Check() const;
 };
+
+// Canonicalisation presets of public CAD datasets (docs/canonical_frame.md):
+//   "shapenet"     ShapeNetCore v2 model_normalized.obj: +y up, front -z, unit
+//                  bounding-box diagonal -> scale 4.49 (KITTI's mean car,
+//                  3.90 x 1.56 x 1.60 m, has a 4.49 m diagonal); own wheels.
+//   "apollocar3d"  ApolloCar3D car_models_json (ReadApolloCarJson): metres,
+//                  y down (up -y), front +z; own wheels.
+// Throws samp::Error naming the known presets for an unknown name.
+CanonicalizeOptions CanonicalPreset(const std::string& name);
+std::vector<std::string> CanonicalPresetNames();
 
 struct CanonicalizeResult {
   Mesh mesh;                         // in the canonical frame, metres
@@ -40,6 +57,10 @@ struct CanonicalizeResult {
   std::string up, forward;           // the axes used (after auto-detection)
   Eigen::Vector3d size;              // length (x), height (y), width (z) in metres
   std::vector<std::string> warnings; // ambiguities met by auto-detection
+  // With options.add_wheels: where the tyres went (mesh = lifted body + tyres;
+  // object_from_cad includes the lift; size is that of the body + tyres).
+  bool wheels_added = false;
+  WheelPlacement wheels;
 };
 
 // Throws samp::Error when the mesh is empty or the size after scaling is implausible.

@@ -8,6 +8,8 @@
 #include <assimp/Importer.hpp>
 #include <cctype>
 #include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <system_error>
 
 #include "libsamp/core/atomic_file.h"
@@ -65,9 +67,57 @@ std::string ExportFormatId(const std::string& path) {
 
 }  // namespace
 
+Mesh ReadApolloCarJson(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  SAMP_CHECK(in.good()) << "cannot read ApolloCar3D model '" << path << "': cannot open the file";
+  nlohmann::json j;
+  try {
+    in >> j;
+  } catch (const nlohmann::json::exception& e) {
+    SAMP_THROW() << "cannot read ApolloCar3D model '" << path << "': invalid JSON (" << e.what() << ")";
+  }
+  SAMP_CHECK(j.is_object()) << "ApolloCar3D model '" << path << "': the top level must be an object";
+  for (const char* key : {"vertices", "faces"}) {
+    SAMP_CHECK(j.contains(key) && j[key].is_array() && !j[key].empty())
+        << "ApolloCar3D model '" << path << "': field '" << key << "' missing or not a non-empty array";
+  }
+  Mesh mesh;
+  const nlohmann::json& vertices = j["vertices"];
+  mesh.vertices.reserve(vertices.size());
+  for (size_t v = 0; v < vertices.size(); ++v) {
+    const nlohmann::json& p = vertices[v];
+    SAMP_CHECK(p.is_array() && p.size() == 3 && p[0].is_number() && p[1].is_number() && p[2].is_number())
+        << "ApolloCar3D model '" << path << "': vertices[" << v << "] is not three numbers";
+    const Eigen::Vector3f q(p[0].get<float>(), p[1].get<float>(), p[2].get<float>());
+    SAMP_CHECK(q.allFinite()) << "ApolloCar3D model '" << path << "': vertices[" << v << "] is not finite";
+    mesh.vertices.push_back(q);
+  }
+  const nlohmann::json& faces = j["faces"];
+  const int64_t n = int64_t(mesh.vertices.size());
+  mesh.triangles.reserve(faces.size());
+  for (size_t f = 0; f < faces.size(); ++f) {
+    const nlohmann::json& t = faces[f];
+    SAMP_CHECK(t.is_array() && t.size() == 3 && t[0].is_number_integer() && t[1].is_number_integer() &&
+               t[2].is_number_integer())
+        << "ApolloCar3D model '" << path << "': faces[" << f << "] is not three integers";
+    Eigen::Vector3i triangle;
+    for (int c = 0; c < 3; ++c) {
+      const int64_t index = t[c].get<int64_t>();
+      SAMP_CHECK(index >= 1) << "ApolloCar3D model '" << path << "': faces[" << f << "]: index " << index
+                             << " is not 1-based";
+      SAMP_CHECK(index <= n) << "ApolloCar3D model '" << path << "': faces[" << f << "]: index " << index
+                             << " exceeds the " << n << " vertices";
+      triangle[c] = int(index - 1);
+    }
+    mesh.triangles.push_back(triangle);
+  }
+  return mesh;
+}
+
 Mesh LoadMesh(const std::string& path) {
   std::error_code ec;
   SAMP_CHECK(fs::is_regular_file(path, ec)) << "cannot read mesh '" << path << "': no such file";
+  if (LowerExtension(path) == ".json") return ReadApolloCarJson(path);
   Assimp::Importer importer;
   // Drop lines and points entirely; keep only triangles after triangulation.
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
@@ -92,6 +142,13 @@ Mesh LoadMesh(const std::string& path) {
 bool IsMeshFile(const std::string& path) {
   const std::string extension = LowerExtension(path);
   if (extension.size() < 2) return false;
+  if (extension == ".json") {
+    std::ifstream in(path, std::ios::binary);
+    std::string head(size_t(64) << 10, '\0');
+    in.read(&head[0], std::streamsize(head.size()));
+    head.resize(size_t(in.gcount()));
+    return head.find("\"vertices\"") != std::string::npos || head.find("\"faces\"") != std::string::npos;
+  }
   Assimp::Importer importer;
   return importer.IsExtensionSupported(extension);
 }

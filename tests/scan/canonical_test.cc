@@ -57,6 +57,53 @@ TEST(Canonicalize, CentimetresZUpMinusYForward) {
   EXPECT_NEAR(t.linear().determinant(), std::pow(0.01, 3), 1e-12);
 }
 
+TEST(Canonicalize, ApolloCar3DPresetMapsXAcrossYDownFrontPlusZ) {
+  // Apollo frame: x across (to the car's right), y down, z to the front; a
+  // 1.8 x 1.5 x 4.5 m box centred at 0 .
+  Mesh mesh = MakeBoxMesh(Eigen::Vector3d(-0.9, -0.75, -2.25), Eigen::Vector3d(0.9, 0.75, 2.25));
+  const CanonicalizeResult result = Canonicalize(mesh, CanonicalPreset("apollocar3d"));
+  EXPECT_TRUE(result.size.isApprox(Eigen::Vector3d(4.5, 1.5, 1.8), 1e-6)) << result.size.transpose();
+  const Eigen::Affine3d& t = result.object_from_cad;
+  EXPECT_NEAR((t * Eigen::Vector3d(0, 0, 2.25)).x(), 2.25, 1e-9);   // front -> +x
+  EXPECT_NEAR((t * Eigen::Vector3d(0, 0.75, 0)).y(), 0.0, 1e-9);    // bottom (+y) on the road
+  EXPECT_NEAR((t * Eigen::Vector3d(0, -0.75, 0)).y(), -1.5, 1e-9);  // roof up
+  EXPECT_NEAR((t * Eigen::Vector3d(-0.9, 0, 0)).z(), 0.9, 1e-9);    // -x (the car's left) -> +z
+  EXPECT_NEAR(t.linear().determinant(), 1.0, 1e-12);
+  EXPECT_TRUE(result.warnings.empty());
+}
+
+TEST(Canonicalize, ShapeNetPresetScalesTheUnitDiagonal) {
+  // ShapeNetCore v2: +y up, front -z, unit bounding-box diagonal.
+  const Eigen::Vector3d size_lhw(3.9, 1.56, 1.60);
+  const Eigen::Vector3d half = 0.5 * size_lhw / size_lhw.norm();  // (length, height, width) halves
+  const Mesh mesh = MakeBoxMesh(Eigen::Vector3d(-half.z(), -half.y(), -half.x()),
+                                Eigen::Vector3d(half.z(), half.y(), half.x()));
+  const CanonicalizeResult result = Canonicalize(mesh, CanonicalPreset("shapenet"));
+  EXPECT_NEAR(result.size.x(), 3.9 * 4.49 / size_lhw.norm(), 1e-6);
+  EXPECT_NEAR(result.size.y(), 1.56 * 4.49 / size_lhw.norm(), 1e-6);
+  EXPECT_NEAR((result.object_from_cad * Eigen::Vector3d(0, 0, -half.x())).x(), 0.5 * result.size.x(), 1e-6);
+  EXPECT_NEAR(result.object_from_cad.linear().determinant(), std::pow(4.49, 3), 1e-6);
+  EXPECT_THROW(CanonicalPreset("kitti"), Error);
+}
+
+TEST(Canonicalize, SynthesisedWheelsTouchTheRoad) {
+  CanonicalizeOptions options;
+  options.scale = 0.01;
+  options.up = "+z";
+  options.forward = "-y";
+  options.add_wheels = true;
+  const CanonicalizeResult result = Canonicalize(CentimetreCarBox(), options);
+  ASSERT_TRUE(result.wheels_added);
+  const AlignedBox box = result.mesh.Bounds();
+  EXPECT_NEAR(box.max.y(), 0.0, 1e-5);  // the tyres
+  EXPECT_NEAR(box.min.y(), -1.5 - options.wheels.ground_clearance, 1e-5);
+  EXPECT_NEAR(result.size.y(), 1.5 + options.wheels.ground_clearance, 1e-5);
+  EXPECT_EQ(result.mesh.triangles.size(), 12u + 4u * 4u * size_t(options.wheels.segments));
+  // object_from_cad maps the body's bottom (CAD z = 20) to the lifted body.
+  EXPECT_NEAR((result.object_from_cad * Eigen::Vector3d(300, 0, 20)).y(),
+              -options.wheels.ground_clearance, 1e-6);
+}
+
 TEST(Canonicalize, TargetLengthScalesToMetres) {
   Mesh mesh = CentimetreCarBox();
   mesh.Transform(Eigen::Affine3d(Eigen::Scaling(10.0)));  // millimetres
@@ -143,7 +190,7 @@ TEST(Manifest, ParsesDefaultsEntriesAndFinds) {
     "comment": "test manifest",
     "models": [
       {"file": "cars/a/a.acc", "target_length": 4.2, "forward": "-y"},
-      {"file": "b.obj", "name": "bee", "up": "+y", "forward": "+z", "min_size": [1, 0.5, 0.5]},
+      {"file": "b.obj", "name": "bee", "up": "+y", "forward": "+z", "min_size": [1, 0.5, 0.5], "wheels": "synthesise"},
       {"file": "f1.acc", "skip": true, "skip_reason": "open-wheel race car"}
     ],
     "defaults": {"scale": 0.01, "up": "+z"}
@@ -164,6 +211,8 @@ TEST(Manifest, ParsesDefaultsEntriesAndFinds) {
   EXPECT_DOUBLE_EQ(*b.canonicalize.scale, 0.01);
   EXPECT_EQ(b.canonicalize.up, "+y");
   EXPECT_TRUE(b.canonicalize.min_size.isApprox(Eigen::Vector3d(1, 0.5, 0.5)));
+  EXPECT_TRUE(b.canonicalize.add_wheels);
+  EXPECT_FALSE(a.canonicalize.add_wheels);
   EXPECT_TRUE(manifest.entries[2].skip);
   EXPECT_EQ(manifest.entries[2].skip_reason, "open-wheel race car");
 
@@ -196,6 +245,7 @@ TEST(Manifest, ErrorsNameTheFileAndField) {
       {R"({"models": [{"file": "a.obj"}, {"file": "a.obj"}]})", {file, "duplicate file"}},
       {R"({"models": [{"file": "x/a.obj"}, {"file": "y/a.obj"}]})", {file, "duplicate name"}},
       {R"({"defaults": {"forward": "+q"}})", {file, "defaults.forward"}},
+      {R"({"models": [{"file": "a.obj", "wheels": "yes"}]})", {file, "models[0].wheels", "synthesise"}},
       {R"({"defaults": {"scale": 1}, "model": []})", {file, "model", "unknown key"}},
       {R"({"models": {}})", {file, "models", "array"}},
       {R"([1, 2])", {file, "object"}},

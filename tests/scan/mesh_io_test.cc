@@ -207,5 +207,67 @@ TEST(MeshIo, IsMeshFile) {
   EXPECT_FALSE(IsMeshFile(""));
 }
 
+// A small ApolloCar3D car_models_json file: a 1.8 x 1.5 x 4.5 m box (x across,
+// y down, front +z), 1-based faces, plus keys the reader ignores.
+std::string ApolloBoxJson() {
+  const Mesh box = MakeBoxMesh(Eigen::Vector3d(-0.9, -0.75, -2.25), Eigen::Vector3d(0.9, 0.75, 2.25));
+  std::string text = "{\"car_type\": \"sedan\", \"vertices\": [";
+  for (size_t v = 0; v < box.vertices.size(); ++v) {
+    const Eigen::Vector3f& p = box.vertices[v];
+    text += (v ? ", [" : "[") + std::to_string(p.x()) + ", " + std::to_string(p.y()) + ", " +
+            std::to_string(p.z()) + "]";
+  }
+  text += "], \"faces\": [";
+  for (size_t t = 0; t < box.triangles.size(); ++t) {
+    const Eigen::Vector3i& f = box.triangles[t];
+    text += (t ? ", [" : "[") + std::to_string(f[0] + 1) + ", " + std::to_string(f[1] + 1) + ", " +
+            std::to_string(f[2] + 1) + "]";
+  }
+  return text + "]}";
+}
+
+TEST(MeshIo, ReadsApolloCarJsonWithOneBasedFaces) {
+  const fs::path dir = test::TempDir("apollo");
+  const fs::path file = dir / "car_models_json" / "019-SUV.json";
+  fs::create_directories(file.parent_path());
+  test::WriteText(file, ApolloBoxJson());
+  test::WriteText(dir / "cad_manifest.json", "{\"models\": []}");
+  EXPECT_TRUE(IsMeshFile(file.string()));
+  EXPECT_FALSE(IsMeshFile((dir / "cad_manifest.json").string()));
+  const Mesh mesh = LoadMesh(file.string());
+  const Mesh expected = MakeBoxMesh(Eigen::Vector3d(-0.9, -0.75, -2.25), Eigen::Vector3d(0.9, 0.75, 2.25));
+  ASSERT_EQ(mesh.vertices.size(), expected.vertices.size());
+  ASSERT_EQ(mesh.triangles.size(), expected.triangles.size());
+  for (size_t t = 0; t < mesh.triangles.size(); ++t) EXPECT_EQ(mesh.triangles[t], expected.triangles[t]);
+  for (size_t v = 0; v < mesh.vertices.size(); ++v) {
+    EXPECT_TRUE(mesh.vertices[v].isApprox(expected.vertices[v], 1e-5f));
+  }
+  fs::remove_all(dir);
+}
+
+TEST(MeshIo, ApolloCarJsonErrorsNameTheField) {
+  const fs::path dir = test::TempDir("apollo_bad");
+  auto expect_error = [&](const std::string& text, const std::string& part) {
+    const fs::path file = dir / "bad.json";
+    test::WriteText(file, text);
+    try {
+      LoadMesh(file.string());
+      ADD_FAILURE() << "no error for " << text;
+    } catch (const Error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("bad.json"), std::string::npos) << message;
+      EXPECT_NE(message.find(part), std::string::npos) << message;
+    }
+  };
+  const std::string v = "\"vertices\": [[0,0,0],[1,0,0],[0,1,0]]";
+  expect_error("{" + v + ", \"faces\": [[0,1,2]]}", "faces[0]: index 0 is not 1-based");
+  expect_error("{" + v + ", \"faces\": [[1,2,4]]}", "faces[0]: index 4 exceeds the 3 vertices");
+  expect_error("{" + v + ", \"faces\": [[1,2]]}", "faces[0] is not three integers");
+  expect_error("{\"vertices\": [[0,0]], \"faces\": [[1,1,1]]}", "vertices[0] is not three numbers");
+  expect_error("{" + v + "}", "field 'faces' missing");
+  expect_error("{\"vertices\": [", "invalid JSON");
+  fs::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace samp
