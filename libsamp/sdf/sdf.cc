@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <cstdio>
 #include <sstream>
 
 #include "libsamp/core/error.h"
@@ -38,13 +39,75 @@ void SdfOptions::Check() const {
       << "sdf: carve_margin must be >= 0, got " << carve_margin;
   SAMP_CHECK(min_inside_fraction >= 0.0 && min_inside_fraction <= 1.0)
       << "sdf: min_inside_fraction must be in [0, 1], got " << min_inside_fraction;
+  SAMP_CHECK(sign == Sign::kCarving || sign == Sign::kCarvingAndClosing)
+      << "sdf: sign must be kCarving or kCarvingAndClosing";
+  SAMP_CHECK(std::isfinite(closing_radius_voxels) && closing_radius_voxels > 0.0 &&
+             closing_radius_voxels <= 16.0)
+      << "sdf: closing_radius_voxels must be in (0, 16], got " << closing_radius_voxels;
+}
+
+void SdfQualityOptions::Check() const {
+  auto in_unit = [](double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; };
+  SAMP_CHECK(in_unit(min_box_fill) && in_unit(borderline_box_fill) && min_box_fill <= borderline_box_fill)
+      << "sdf gate: need 0 <= min_box_fill <= borderline_box_fill <= 1, got " << min_box_fill << ", "
+      << borderline_box_fill;
+  SAMP_CHECK(in_unit(min_largest_component) && in_unit(borderline_largest_component) &&
+             min_largest_component <= borderline_largest_component)
+      << "sdf gate: need 0 <= min_largest_component <= borderline_largest_component <= 1, got "
+      << min_largest_component << ", " << borderline_largest_component;
+  SAMP_CHECK(in_unit(min_closing_agreement) && in_unit(borderline_closing_agreement) &&
+             min_closing_agreement <= borderline_closing_agreement)
+      << "sdf gate: need 0 <= min_closing_agreement <= borderline_closing_agreement <= 1, got "
+      << min_closing_agreement << ", " << borderline_closing_agreement;
+}
+
+SdfQuality CheckSdfQuality(const Sdf& sdf, const AlignedBox& shape_box, const SdfQualityOptions& options) {
+  options.Check();
+  SdfQuality q;
+  const GridSpec& grid = sdf.grid;
+  // The shape's box within the grid's box (voxel centres +- h / 2).
+  const Eigen::Vector3d half(0.5 * grid.voxel_size, 0.5 * grid.voxel_size, 0.5 * grid.voxel_size);
+  const Eigen::Vector3d lo = shape_box.min.cwiseMax(grid.MinCorner() - half);
+  const Eigen::Vector3d hi = shape_box.max.cwiseMin(grid.MaxCorner() + half);
+  const double box_volume = (hi - lo).cwiseMax(0.0).prod();
+  const double inside_volume =
+      sdf.summary.inside_fraction * double(grid.NumVoxels()) * std::pow(grid.voxel_size, 3);
+  q.box_fill = box_volume > 0.0 ? inside_volume / box_volume : 0.0;
+  q.largest_component = sdf.summary.largest_component_share;
+  q.closing_agreement = sdf.summary.inside_fraction > 0.0
+                            ? std::min(1.0, sdf.summary.closing_inside_fraction / sdf.summary.inside_fraction)
+                            : 0.0;
+  std::ostringstream failed, borderline;
+  auto check = [&](const char* name, double value, double minimum, double limit) {
+    char text[160];
+    if (value < minimum) {
+      std::snprintf(text, sizeof(text), "%s%s %.3f below the minimum %.3f", failed.tellp() > 0 ? "; " : "", name,
+                    value, minimum);
+      failed << text;
+    } else if (value < limit) {
+      std::snprintf(text, sizeof(text), "%s%s %.3f below %.3f", borderline.tellp() > 0 ? "; " : "", name, value,
+                    limit);
+      borderline << text;
+    }
+  };
+  check("inside volume / box volume", q.box_fill, options.min_box_fill, options.borderline_box_fill);
+  check("largest inside component share", q.largest_component, options.min_largest_component,
+        options.borderline_largest_component);
+  check("closing agreement", q.closing_agreement, options.min_closing_agreement,
+        options.borderline_closing_agreement);
+  q.pass = failed.tellp() == 0;
+  q.borderline = q.pass && borderline.tellp() > 0;
+  q.reason = q.pass ? borderline.str() : failed.str();
+  return q;
 }
 
 std::string SdfSummary::BriefReport() const {
   std::ostringstream s;
   s << "SDF: " << num_seen_triangles << " seen triangles, inside fraction "
-    << inside_fraction << (sign_ok ? "" : " (too small: sign failed)") << ", " << seconds
-    << " s";
+    << inside_fraction << (sign_ok ? "" : " (too small: sign failed)")
+    << " (carving " << carving_inside_fraction << ", closing " << closing_inside_fraction
+    << ", disagreement " << sign_disagreement << "), largest inside component "
+    << largest_component_share << " of " << num_inside_components << ", " << seconds << " s";
   return s.str();
 }
 
@@ -785,6 +848,151 @@ void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
   }
 }
 
+
+// The closing of the seen surface with radius tau = radius_voxels * h
+// (docs/sdf.md, "Sign"): O = the voxels farther than tau from the surface
+// that a 6-connected flood fill reaches from the grid's border, starting at
+// border voxels that the carving also calls outside (a body cut by the grid
+// border does not seed the fill). A voxel in O is outside. So is every voxel
+// in the open ball of radius d(o) around some o in O: that ball holds no
+// surface, so it lies wholly on o's side (exact up to the grid). Voxels
+// within tau of the surface look for such a ball among the O voxels within
+// tau + 1.5 h; voxels on the surface (d <= 1e-3 h, no direction) keep the
+// carving's word. Every other voxel is inside: gaps narrower than about 2 tau
+// are closed, and concave corners keep their shape (they are covered by the
+// balls of the O voxels beyond them). Returns false, leaving *closed_outside
+// empty, when no border voxel can seed the fill.
+bool ClosingOutside(const GridSpec& grid, const std::vector<float>& distance,
+                    const std::vector<uint8_t>& carved,
+                    float radius_voxels, std::vector<uint8_t>* closed_outside) {
+  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  const size_t n = distance.size();
+  const float h = float(grid.voxel_size);
+  const float tau = radius_voxels * h;
+  std::vector<uint8_t> fill(n, 0);
+  std::vector<int32_t> queue;
+  queue.reserve(n / 4);
+  auto seed = [&](int i, int j, int k) {
+    const int64_t v = grid.Index(i, j, k);
+    if (!fill[size_t(v)] && carved[size_t(v)] && distance[size_t(v)] > tau) {
+      fill[size_t(v)] = 1;
+      queue.push_back(int32_t(v));
+    }
+  };
+  for (int k = 0; k < nz; ++k) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        if (i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1) seed(i, j, k);
+      }
+    }
+  }
+  if (queue.empty()) return false;
+  const int64_t sy = nx, sz = int64_t(nx) * ny;
+  for (size_t head = 0; head < queue.size(); ++head) {
+    const int64_t v = queue[head];
+    const int i = int(v % nx), j = int((v / nx) % ny), k = int(v / sz);
+    auto visit = [&](int64_t u) {
+      if (!fill[size_t(u)] && distance[size_t(u)] > tau) {
+        fill[size_t(u)] = 1;
+        queue.push_back(int32_t(u));
+      }
+    };
+    if (i > 0) visit(v - 1);
+    if (i < nx - 1) visit(v + 1);
+    if (j > 0) visit(v - sy);
+    if (j < ny - 1) visit(v + sy);
+    if (k > 0) visit(v - sz);
+    if (k < nz - 1) visit(v + sz);
+  }
+  closed_outside->assign(n, 0);
+  const int reach = int(std::ceil(radius_voxels + 1.5f));
+  // Neighbour offsets within the search radius, nearest first (an early hit is likely).
+  struct Offset {
+    int di, dj, dk;
+    float squared_voxels;
+  };
+  std::vector<Offset> offsets;
+  for (int dk = -reach; dk <= reach; ++dk) {
+    for (int dj = -reach; dj <= reach; ++dj) {
+      for (int di = -reach; di <= reach; ++di) {
+        const float r2 = float(di * di + dj * dj + dk * dk);
+        if (r2 > 0.0f && r2 <= float(reach * reach)) offsets.push_back({di, dj, dk, r2});
+      }
+    }
+  }
+  std::stable_sort(offsets.begin(), offsets.end(),
+                   [](const Offset& a, const Offset& b) { return a.squared_voxels < b.squared_voxels; });
+  const float on_surface = 1e-3f * h;
+  const float h2 = h * h;
+  for (int k = 0; k < nz; ++k) {
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        const size_t v = size_t(grid.Index(i, j, k));
+        if (fill[v]) {
+          (*closed_outside)[v] = 1;
+          continue;
+        }
+        const float d = distance[v];
+        if (d > tau) continue;  // enclosed: inside
+        if (!(d > on_surface)) {
+          (*closed_outside)[v] = carved[v];  // on the surface
+          continue;
+        }
+        for (const Offset& o : offsets) {
+          const int oi = i + o.di, oj = j + o.dj, ok = k + o.dk;
+          if (oi < 0 || oj < 0 || ok < 0 || oi >= nx || oj >= ny || ok >= nz) continue;
+          const size_t u = size_t(grid.Index(oi, oj, ok));
+          if (fill[u] && o.squared_voxels * h2 < distance[u] * distance[u]) {
+            (*closed_outside)[v] = 1;
+            break;
+          }
+        }
+      }
+    }
+  }
+  return true;
+}
+
+// Number of 6-connected components of the inside voxels (outside[v] == 0)
+// and the share of the inside voxels in the largest one (0 when none).
+void InsideComponents(const GridSpec& grid, const std::vector<uint8_t>& outside,
+                      int* num_components, double* largest_share) {
+  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  const int64_t sy = nx, sz = int64_t(nx) * ny;
+  std::vector<uint8_t> visited(outside.size(), 0);
+  std::vector<int32_t> stack;
+  int64_t total = 0, largest = 0;
+  *num_components = 0;
+  for (size_t start = 0; start < outside.size(); ++start) {
+    if (outside[start] || visited[start]) continue;
+    ++*num_components;
+    int64_t size = 0;
+    visited[start] = 1;
+    stack.assign(1, int32_t(start));
+    while (!stack.empty()) {
+      const int64_t v = stack.back();
+      stack.pop_back();
+      ++size;
+      const int i = int(v % nx), j = int((v / nx) % ny), k = int(v / sz);
+      auto visit = [&](int64_t u) {
+        if (!outside[size_t(u)] && !visited[size_t(u)]) {
+          visited[size_t(u)] = 1;
+          stack.push_back(int32_t(u));
+        }
+      };
+      if (i > 0) visit(v - 1);
+      if (i < nx - 1) visit(v + 1);
+      if (j > 0) visit(v - sy);
+      if (j < ny - 1) visit(v + sy);
+      if (k > 0) visit(v - sz);
+      if (k < nz - 1) visit(v + sz);
+    }
+    total += size;
+    largest = std::max(largest, size);
+  }
+  *largest_share = total > 0 ? double(largest) / double(total) : 0.0;
+}
+
 }  // namespace
 
 Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
@@ -935,6 +1143,25 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
 
   sdf.summary.carving_seconds = lap();
 
+  // 3. Closing, and the sign: inside where either says inside.
+  int64_t carving_inside = 0;
+  for (size_t v = 0; v < num_voxels; ++v) carving_inside += int64_t(!outside[v]);
+  std::vector<uint8_t> closed_outside;
+  const bool closing = ClosingOutside(grid, distance, outside, float(options.closing_radius_voxels),
+                                      &closed_outside);
+  int64_t closing_inside = 0, disagree = 0;
+  if (closing) {
+    for (size_t v = 0; v < num_voxels; ++v) {
+      closing_inside += int64_t(!closed_outside[v]);
+      disagree += int64_t(closed_outside[v] != outside[v]);
+    }
+    if (options.sign == SdfOptions::Sign::kCarvingAndClosing) {
+      for (size_t v = 0; v < num_voxels; ++v) outside[v] &= closed_outside[v];
+    }
+  }
+  sdf.summary.carving_inside_fraction = double(carving_inside) / double(num_voxels);
+  sdf.summary.closing_inside_fraction = double(closing_inside) / double(num_voxels);
+
   sdf.grid = grid;
   sdf.values.resize(num_voxels);
   const float truncation = float(options.truncation);
@@ -945,6 +1172,10 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
     if (truncation > 0.0f) value = std::clamp(value, -truncation, truncation);
     sdf.values[v] = value;
   }
+  sdf.summary.sign_disagreement = inside > 0 ? double(disagree) / double(inside) : 0.0;
+  InsideComponents(grid, outside, &sdf.summary.num_inside_components,
+                   &sdf.summary.largest_component_share);
+  sdf.summary.closing_seconds = lap();
   sdf.summary.num_seen_triangles = int(triangles.size());
   sdf.summary.inside_fraction = double(inside) / double(num_voxels);
   sdf.summary.sign_ok = sdf.summary.inside_fraction >= options.min_inside_fraction;

@@ -4,7 +4,9 @@
 // same mesh and grid; then a sign check on open / non-watertight meshes.
 //
 //   sdf_bench [--benchmark_filter=...] [--sdf_timing=0] [--sdf_report=0]
-//             [--sdf_cad_dir=CACHE_DIR/cars]     (runs single-threaded)
+//             [--sdf_cad_dir=CACHE_DIR/cars] [--sdf_corpus=0]   (runs single-threaded)
+// The cracked corpus (docs/sdf.md, "Cracked meshes") runs on the procedural
+// bodies and, with --sdf_cad_dir, on every car of the manifest not skipped.
 #include <benchmark/benchmark.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/MeshToVolume.h>
@@ -22,6 +24,7 @@
 
 #include "libsamp/core/grid_spec.h"
 #include "libsamp/core/mesh.h"
+#include "libsamp/core/wheels.h"
 #include "libsamp/core/error.h"
 #include "libsamp/scan/canonical.h"
 #include "libsamp/scan/embree_scene.h"
@@ -29,6 +32,7 @@
 #include "libsamp/scan/scanner.h"
 #include "libsamp/sdf/sdf.h"
 #include "libsamp/sdf/vdb_io.h"
+#include "tests/sdf/crack_corpus.h"
 
 namespace samp {
 namespace {
@@ -112,6 +116,20 @@ void BM_ComputeSdf(benchmark::State& state) {
   state.counters["inside_fraction"] = sdf.summary.inside_fraction;
 }
 BENCHMARK(BM_ComputeSdf)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
+// The sign before issue 14 (carving alone): what the closing costs.
+void BM_ComputeSdfCarvingOnly(benchmark::State& state) {
+  const Scene& s = ClosedScene();
+  SdfOptions options;
+  options.sign = SdfOptions::Sign::kCarving;
+  Sdf sdf;
+  for (auto _ : state) {
+    sdf = ComputeSdf(s.mesh, s.scan, s.grid, options, /*parallel=*/false);
+    benchmark::DoNotOptimize(sdf.values.data());
+  }
+  state.counters["closing_ms"] = 1e3 * sdf.summary.closing_seconds;
+}
+BENCHMARK(BM_ComputeSdfCarvingOnly)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 void BM_OpenVdbMeshToLevelSet(benchmark::State& state) {
   const Scene& s = ClosedScene();
@@ -388,13 +406,20 @@ void RunSignCheck() {
   cases.push_back({"hull, open arches + bottom, seats (solid)", MakeOpenHull(), EllipsoidSdf});
   cases.push_back({"hull, three 0.1 m slits, seats (solid)", MakeSlitHull(), EllipsoidSdf});
   std::printf("\nWrong-sign voxels (|truth| >= 1 voxel), same grid:\n");
-  std::printf("  %-48s %12s %14s %10s\n", "mesh", "ComputeSdf", "meshToLevelSet", "voxels");
+  std::printf("  %-48s %12s %12s %14s %10s\n", "mesh", "ComputeSdf", "carving only", "meshToLevelSet",
+              "voxels");
   for (size_t index = 0; index < cases.size(); ++index) {
     const Case& c = cases[index];
     const ScanResult scan = index == 0 ? closed.scan : ScanMesh(c.mesh, ScanOptions());
     const Sdf sdf = ComputeSdf(c.mesh, scan, closed.grid, SdfOptions());
     const SignCount ours_count = CountWrongSigns(
         closed.grid, [&](int i, int j, int k) { return sdf.values[size_t(closed.grid.Index(i, j, k))]; },
+        c.truth);
+    SdfOptions carving_options;
+    carving_options.sign = SdfOptions::Sign::kCarving;
+    const Sdf carving = ComputeSdf(c.mesh, scan, closed.grid, carving_options);
+    const SignCount carving_count = CountWrongSigns(
+        closed.grid, [&](int i, int j, int k) { return carving.values[size_t(closed.grid.Index(i, j, k))]; },
         c.truth);
     const VdbMesh vdb_mesh = ToVdb(c.mesh);
     const auto level_set_grid =
@@ -403,8 +428,9 @@ void RunSignCheck() {
     const SignCount vdb_count = CountWrongSigns(
         closed.grid, [&](int i, int j, int k) { return accessor.getValue(openvdb::Coord(i, j, k)); },
         c.truth);
-    std::printf("  %-48s %12lld %14lld %10lld\n", c.name, static_cast<long long>(ours_count.wrong),
-                static_cast<long long>(vdb_count.wrong), static_cast<long long>(ours_count.counted));
+    std::printf("  %-48s %12lld %12lld %14lld %10lld\n", c.name, static_cast<long long>(ours_count.wrong),
+                static_cast<long long>(carving_count.wrong), static_cast<long long>(vdb_count.wrong),
+                static_cast<long long>(ours_count.counted));
   }
 }
 
@@ -532,6 +558,70 @@ void RunCadCheck(const std::string& folder) {
   }
 }
 
+
+// ---------------------------------------------------------------------------
+// The cracked corpus: each clean mesh (procedural bodies on wheels; with
+// --sdf_cad_dir also every usable real car, canonicalised by the manifest)
+// damaged seven ways; wrong-sign voxels against the clean mesh's carving, on
+// the training grid (0.1 m, GridSpec::CarDefault), default 100-view scans.
+void RunCrackedCorpus(const std::string& cad_dir) {
+  std::vector<std::pair<std::string, Mesh>> bodies = {
+      {"sedan (procedural)", AddWheels(test::MakeSedanBody(), WheelOptions()).Combined()},
+      {"van (procedural)", AddWheels(test::MakeVanBody(), WheelOptions()).Combined()}};
+  if (!cad_dir.empty()) {
+    const Manifest manifest = LoadManifest(cad_dir + "/cad_manifest.json");
+    for (const ManifestEntry& entry : manifest.entries) {
+      if (entry.skip) continue;
+      try {
+        bodies.push_back({entry.name, Canonicalize(LoadMesh(cad_dir + "/" + entry.file), entry.canonicalize).mesh});
+      } catch (const Error& e) {
+        std::printf("  %s not used: %s\n", entry.name.c_str(), e.what());
+      }
+    }
+  }
+  const GridSpec grid = GridSpec::CarDefault();
+  SdfOptions carving, closing;
+  carving.sign = SdfOptions::Sign::kCarving;
+  carving.min_inside_fraction = closing.min_inside_fraction = 0.0;
+  std::printf("\nCracked corpus: wrong-sign voxels (>= 1 voxel from the clean surface) as %% of the clean inside,\n"
+              "grid %s, against the carving of the clean mesh\n", grid.ToString().c_str());
+  std::printf("  %-20s %-10s", "mesh", "inside");
+  const std::vector<test::CrackOptions> variants = test::CrackVariants();
+  std::printf(" %-13s", "clean");
+  for (size_t v = 0; v < variants.size(); ++v) std::printf(" %-13s", ("v" + std::to_string(v + 1)).c_str());
+  std::printf("   (each: carving / carving+closing)\n");
+  double worst_carving = 0.0, worst_closing = 0.0, closing_ms = 0.0, total_ms = 0.0;
+  int runs = 0;
+  for (const auto& [name, clean] : bodies) {
+    const ScanResult clean_scan = ScanMesh(clean, ScanOptions());
+    const Sdf reference = ComputeSdf(clean, clean_scan, grid, carving);
+    const Sdf clean_closing = ComputeSdf(clean, clean_scan, grid, closing);
+    const test::SignDifference own = test::CompareSigns(grid, reference.values, clean_closing.values);
+    std::printf("  %-20s %-10lld %5.2f/%-7.2f", name.c_str(), static_cast<long long>(own.clean_inside), 0.0,
+                100.0 * own.Share());
+    worst_closing = std::max(worst_closing, own.Share());
+    for (const test::CrackOptions& variant : variants) {
+      const Mesh cracked = test::CrackMesh(clean, variant);
+      const ScanResult scan = ScanMesh(cracked, ScanOptions());
+      const Sdf a = ComputeSdf(cracked, scan, grid, carving);
+      const Sdf b = ComputeSdf(cracked, scan, grid, closing);
+      const double wa = test::CompareSigns(grid, reference.values, a.values).Share();
+      const double wb = test::CompareSigns(grid, reference.values, b.values).Share();
+      worst_carving = std::max(worst_carving, wa);
+      worst_closing = std::max(worst_closing, wb);
+      closing_ms += 1e3 * b.summary.closing_seconds;
+      total_ms += 1e3 * b.summary.seconds;
+      ++runs;
+      std::printf(" %5.2f/%-7.2f", 100.0 * wa, 100.0 * wb);
+    }
+    std::printf("\n");
+  }
+  std::printf("variants:");
+  for (size_t v = 0; v < variants.size(); ++v) std::printf(" v%zu = %s;", v + 1, variants[v].name.c_str());
+  std::printf("\nworst: carving %.2f %%, carving+closing %.2f %%; closing step %.2f ms of %.1f ms per SDF (mean of %d)\n",
+              100.0 * worst_carving, 100.0 * worst_closing, closing_ms / std::max(1, runs),
+              total_ms / std::max(1, runs), runs);
+}
 }  // namespace
 }  // namespace samp
 
@@ -543,7 +633,7 @@ int main(int argc, char** argv) {
   //   --sdf_report=0      skip everything after the benchmarks (e.g. for profiling)
   //   --sdf_timing=0      skip the timing summary (OpenVDB's whole-grid SDF takes ~1 min)
   //   --sdf_cad_dir=DIR   also compare signs on the real CAD cars in DIR
-  bool report = true, timing = true;
+  bool report = true, timing = true, corpus = true;
   std::string cad_dir;
   int kept = 1;
   for (int a = 1; a < argc; ++a) {
@@ -552,6 +642,8 @@ int main(int argc, char** argv) {
       report = false;
     } else if (arg == "--sdf_timing=0") {
       timing = false;
+    } else if (arg == "--sdf_corpus=0") {
+      corpus = false;
     } else if (arg.rfind("--sdf_cad_dir=", 0) == 0) {
       cad_dir = arg.substr(std::string("--sdf_cad_dir=").size());
     } else {
@@ -566,5 +658,6 @@ int main(int argc, char** argv) {
   if (report && timing) samp::RunTimingSummary();
   if (report) samp::RunSignCheck();
   if (report && !cad_dir.empty()) samp::RunCadCheck(cad_dir);
+  if (report && corpus) samp::RunCrackedCorpus(cad_dir);
   return 0;
 }

@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "libsamp/core/error.h"
+#include "libsamp/core/wheels.h"
 #include "libsamp/scan/scanner.h"
+#include "tests/sdf/crack_corpus.h"
 
 namespace samp {
 namespace {
@@ -377,6 +379,7 @@ TEST(Sdf, GroupedCarvingEqualsThePerVoxelRule) {
     SdfOptions options;
     options.carve_margin = c.margin;
     options.min_inside_fraction = 0.0;
+    options.sign = SdfOptions::Sign::kCarving;  // the carving alone is compared here
     const Sdf sdf = ComputeSdf(c.mesh, scan, grid, options);
     std::vector<float> distance(sdf.values.size());
     for (size_t v = 0; v < distance.size(); ++v) distance[v] = std::abs(sdf.values[v]);
@@ -391,6 +394,89 @@ TEST(Sdf, GroupedCarvingEqualsThePerVoxelRule) {
     EXPECT_EQ(differ, 0) << c.name;
     if (std::string(c.name) != "open box with a box inside") EXPECT_GT(inside, 1000) << c.name;
   }
+}
+
+// The cracked corpus (docs/sdf.md, "Cracked meshes"): two car-like bodies on
+// wheels, each damaged seven ways; the sign of every cracked SDF against the
+// clean original's (carving on the clean mesh), on the training grid.
+TEST(Sdf, CrackedCorpusKeepsTheCleanSign) {
+  const GridSpec grid = GridSpec::CarDefault();
+  const ScanOptions scan_options;  // the trainer's defaults
+  SdfOptions carving, closing;
+  carving.sign = SdfOptions::Sign::kCarving;
+  carving.min_inside_fraction = closing.min_inside_fraction = 0.0;
+  const std::vector<std::pair<std::string, Mesh>> bodies = {
+      {"sedan", AddWheels(test::MakeSedanBody(), WheelOptions()).Combined()},
+      {"van", AddWheels(test::MakeVanBody(), WheelOptions()).Combined()}};
+  double worst_closing = 0.0, worst_carving = 0.0;
+  for (const auto& [name, clean] : bodies) {
+    const Sdf reference = ComputeSdf(clean, ScanMesh(clean, scan_options), grid, carving);
+    const Sdf clean_closing = ComputeSdf(clean, ScanMesh(clean, scan_options), grid, closing);
+    const test::SignDifference own = test::CompareSigns(grid, reference.values, clean_closing.values);
+    std::printf("%-6s clean: inside %lld voxels (>= 1 voxel deep), closing differs on %lld (%.2f %%)\n",
+                name.c_str(), static_cast<long long>(own.clean_inside), static_cast<long long>(own.wrong),
+                100.0 * own.Share());
+    EXPECT_GT(own.clean_inside, 2000) << name;
+    EXPECT_LE(own.Share(), 0.01) << name;
+    for (const test::CrackOptions& variant : test::CrackVariants()) {
+      const Mesh cracked = test::CrackMesh(clean, variant);
+      const ScanResult scan = ScanMesh(cracked, scan_options);
+      const Sdf by_carving = ComputeSdf(cracked, scan, grid, carving);
+      const Sdf by_closing = ComputeSdf(cracked, scan, grid, closing);
+      const test::SignDifference a = test::CompareSigns(grid, reference.values, by_carving.values);
+      const test::SignDifference b = test::CompareSigns(grid, reference.values, by_closing.values);
+      std::printf("%-6s %-48s carving %6lld (%6.2f %%)  carving+closing %6lld (%5.2f %%)  "
+                  "disagreement %.3f, largest component %.3f\n",
+                  name.c_str(), variant.name.c_str(), static_cast<long long>(a.wrong), 100.0 * a.Share(),
+                  static_cast<long long>(b.wrong), 100.0 * b.Share(), by_closing.summary.sign_disagreement,
+                  by_closing.summary.largest_component_share);
+      EXPECT_LE(b.Share(), 0.01) << name << ", " << variant.name;
+      worst_closing = std::max(worst_closing, b.Share());
+      worst_carving = std::max(worst_carving, a.Share());
+    }
+  }
+  // The corpus bites: the carving alone gets some cracked mesh wrong.
+  EXPECT_GT(worst_carving, 0.05);
+  std::printf("worst wrong-sign share: carving %.2f %%, carving+closing %.2f %%\n", 100.0 * worst_carving,
+              100.0 * worst_closing);
+}
+
+TEST(Sdf, QualityGateNamesTheFailingFigure) {
+  ScanOptions scan_options = TestScanOptions();
+  scan_options.width = scan_options.height = 200;
+  const GridSpec grid = GridSpec::FromBox(Eigen::Vector3d(-1.5, -0.8, -0.8), Eigen::Vector3d(1.5, 0.8, 0.8), 0.05);
+  SdfOptions options;
+  options.min_inside_fraction = 0.0;
+  // A closed box fills its box and is one component.
+  const Mesh box = MakeBoxMesh(Eigen::Vector3d(-1, -0.5, -0.5), Eigen::Vector3d(1, 0.5, 0.5));
+  const Sdf solid = ComputeSdf(box, ScanMesh(box, scan_options), grid, options);
+  const SdfQuality good = CheckSdfQuality(solid, box.Bounds(), SdfQualityOptions());
+  EXPECT_TRUE(good.pass) << good.reason;
+  EXPECT_FALSE(good.borderline) << good.reason;
+  EXPECT_GT(good.box_fill, 0.85);  // the voxels on the faces count as outside
+  EXPECT_EQ(solid.summary.num_inside_components, 1);
+  EXPECT_DOUBLE_EQ(good.largest_component, 1.0);
+  EXPECT_GT(good.closing_agreement, 0.99);
+  // Two equal boxes apart: the largest component holds half of the inside.
+  Mesh two = MakeBoxMesh(Eigen::Vector3d(-1.2, -0.3, -0.3), Eigen::Vector3d(-0.6, 0.3, 0.3));
+  two.Append(MakeBoxMesh(Eigen::Vector3d(0.6, -0.3, -0.3), Eigen::Vector3d(1.2, 0.3, 0.3)));
+  const Sdf apart = ComputeSdf(two, ScanMesh(two, scan_options), grid, options);
+  const SdfQuality split = CheckSdfQuality(apart, two.Bounds(), SdfQualityOptions());
+  EXPECT_EQ(apart.summary.num_inside_components, 2);
+  EXPECT_NEAR(split.largest_component, 0.5, 0.01);
+  EXPECT_FALSE(split.pass);
+  EXPECT_NE(split.reason.find("largest inside component share 0.5"), std::string::npos) << split.reason;
+  // An open box (one face missing) is empty: its fill is 0.
+  Mesh open = box;
+  open.triangles.erase(open.triangles.begin() + 4, open.triangles.begin() + 6);
+  const Sdf hollow = ComputeSdf(open, ScanMesh(open, scan_options), grid, options);
+  const SdfQuality empty = CheckSdfQuality(hollow, open.Bounds(), SdfQualityOptions());
+  EXPECT_FALSE(empty.pass);
+  EXPECT_NE(empty.reason.find("inside volume / box volume 0.000 below the minimum 0.300"), std::string::npos)
+      << empty.reason;
+  SdfQualityOptions bad;
+  bad.min_box_fill = 0.6;  // above its borderline limit
+  EXPECT_THROW(bad.Check(), Error);
 }
 
 TEST(Sdf, BadInputIsAnError) {
@@ -419,6 +505,9 @@ TEST(Sdf, BadInputIsAnError) {
   options = SdfOptions();
   options.truncation = -1;
   EXPECT_THROW(ComputeSdf(mesh, scan, grid, options), Error);
+  options = SdfOptions();
+  options.closing_radius_voxels = 0.0;
+  EXPECT_THROW(options.Check(), Error);
 }
 
 }  // namespace
