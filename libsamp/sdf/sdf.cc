@@ -1147,7 +1147,9 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
   int64_t carving_inside = 0;
   for (size_t v = 0; v < num_voxels; ++v) carving_inside += int64_t(!outside[v]);
   std::vector<uint8_t> closed_outside;
-  const bool closing = ClosingOutside(grid, distance, outside, float(options.closing_radius_voxels),
+  // kCarving: the sign before issue 14, no closing (closing_inside_fraction stays 0).
+  const bool closing = options.sign == SdfOptions::Sign::kCarvingAndClosing &&
+                       ClosingOutside(grid, distance, outside, float(options.closing_radius_voxels),
                                       &closed_outside);
   int64_t closing_inside = 0, disagree = 0;
   if (closing) {
@@ -1155,9 +1157,7 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
       closing_inside += int64_t(!closed_outside[v]);
       disagree += int64_t(closed_outside[v] != outside[v]);
     }
-    if (options.sign == SdfOptions::Sign::kCarvingAndClosing) {
-      for (size_t v = 0; v < num_voxels; ++v) outside[v] &= closed_outside[v];
-    }
+    for (size_t v = 0; v < num_voxels; ++v) outside[v] &= closed_outside[v];
   }
   sdf.summary.carving_inside_fraction = double(carving_inside) / double(num_voxels);
   sdf.summary.closing_inside_fraction = double(closing_inside) / double(num_voxels);

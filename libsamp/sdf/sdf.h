@@ -52,7 +52,7 @@ struct SdfSummary {
   bool sign_ok = false;           // inside_fraction >= options.min_inside_fraction
   // Quality figures of the sign (the trainer's gate, docs/training.md):
   double carving_inside_fraction = 0.0;  // inside share of the grid by carving alone
-  double closing_inside_fraction = 0.0;  // inside share by the closing alone (0: no fill seed)
+  double closing_inside_fraction = 0.0;  // inside share by the closing alone (0: kCarving or no fill seed)
   // Voxels where carving and closing disagree, as a share of the final inside
   // voxels (0 when nothing is inside).
   double sign_disagreement = 0.0;

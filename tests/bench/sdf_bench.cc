@@ -389,6 +389,27 @@ void RunTimingSummary() {
               1e3 * whole, whole / ours);
 }
 
+// What the closing costs: thread CPU medians of the default sign and of the
+// carving alone on the closed ellipsoid (same scan, same grid).
+void RunSignCost() {
+  const Scene& closed = ClosedScene();
+  SdfOptions carving;
+  carving.sign = SdfOptions::Sign::kCarving;
+  double closing_step = 0.0;
+  const double with_closing = MedianSeconds(7, [&] {
+    closing_step = ComputeSdf(closed.mesh, closed.scan, closed.grid, SdfOptions(), false).summary.closing_seconds;
+  });
+  const double carving_only = MedianSeconds(7, [&] {
+    ComputeSdf(closed.mesh, closed.scan, closed.grid, carving, false);
+  });
+  std::printf("\nSign cost (closed ellipsoid, %lld voxels, one thread, median thread CPU of 7):\n"
+              "  ComputeSdf, carving + closing (default)   %8.1f ms\n"
+              "  ComputeSdf, carving alone (kCarving)      %8.1f ms  (closing adds %.1f ms, %.1f %%;"
+              " last closing step %.1f ms wall)\n",
+              static_cast<long long>(closed.grid.NumVoxels()), 1e3 * with_closing, 1e3 * carving_only,
+              1e3 * (with_closing - carving_only), 100.0 * (with_closing / carving_only - 1.0), 1e3 * closing_step);
+}
+
 void RunSignCheck() {
   const Scene& closed = ClosedScene();
   const auto transform = VdbTransform(closed.grid);
@@ -656,6 +677,7 @@ int main(int argc, char** argv) {
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   if (report && timing) samp::RunTimingSummary();
+  if (report) samp::RunSignCost();
   if (report) samp::RunSignCheck();
   if (report && !cad_dir.empty()) samp::RunCadCheck(cad_dir);
   if (report && corpus) samp::RunCrackedCorpus(cad_dir);
