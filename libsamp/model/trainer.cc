@@ -72,7 +72,11 @@ std::vector<Job> FindJobs(const TrainOptions& options, const Manifest* manifest)
       job.skip_reason = entry->skip_reason.empty() ? "no reason given" : entry->skip_reason;
     } else {
       job.name = fs::path(job.relative_path).stem().string();
-      if (manifest != nullptr) job.canonicalize = manifest->defaults;
+      if (!options.preset.empty()) {
+        job.canonicalize = CanonicalPreset(options.preset);
+      } else if (manifest != nullptr) {
+        job.canonicalize = manifest->defaults;
+      }
     }
   }
   if (manifest != nullptr) {
@@ -128,13 +132,16 @@ void TrainOptions::Check() const {
   grid.Check();
   scan.Check();
   sdf.Check();
+  gate.Check();
   pca.Check();
+  if (!preset.empty()) CanonicalPreset(preset);  // throws naming the known presets
 }
 
 std::string TrainOptions::ToJson() const {
   nlohmann::json j;
   j["cad_folder"] = cad_folder;
   j["manifest"] = manifest_path;
+  j["preset"] = preset;
   j["grid"] = {{"origin", Vector3Json(grid.origin)},
                {"voxel_size", grid.voxel_size},
                {"dims", {grid.dims.x(), grid.dims.y(), grid.dims.z()}}};
@@ -145,7 +152,15 @@ std::string TrainOptions::ToJson() const {
                {"distance_factor", scan.distance_factor}};
   j["sdf"] = {{"truncation", sdf.truncation},
               {"carve_margin", sdf.carve_margin},
-              {"min_inside_fraction", sdf.min_inside_fraction}};
+              {"min_inside_fraction", sdf.min_inside_fraction},
+              {"sign", sdf.sign == SdfOptions::Sign::kCarving ? "carving" : "carving_and_closing"},
+              {"closing_radius_voxels", sdf.closing_radius_voxels}};
+  j["gate"] = {{"min_box_fill", gate.min_box_fill},
+               {"borderline_box_fill", gate.borderline_box_fill},
+               {"min_largest_component", gate.min_largest_component},
+               {"borderline_largest_component", gate.borderline_largest_component},
+               {"min_closing_agreement", gate.min_closing_agreement},
+               {"borderline_closing_agreement", gate.borderline_closing_agreement}};
   j["pca"] = {{"num_components", pca.num_components}};
   return j.dump();
 }
@@ -155,8 +170,8 @@ std::string TrainSummary::BriefReport() const {
   size_t name_width = 5;
   for (const TrainedShape& s : shapes) name_width = std::max(name_width, s.name.size());
   char line[512];
-  std::snprintf(line, sizeof(line), "%-*s  %-4s  %-22s  %7s  %7s  %s\n", int(name_width), "model",
-                "used", "size l x h x w (m)", "inside", "time", "file / reason skipped");
+  std::snprintf(line, sizeof(line), "%-*s  %-4s  %-22s  %7s  %5s  %7s  %s\n", int(name_width), "model",
+                "used", "size l x h x w (m)", "inside", "fill", "time", "file / reason skipped");
   out << line;
   for (const TrainedShape& s : shapes) {
     const std::string size =
@@ -165,10 +180,20 @@ std::string TrainSummary::BriefReport() const {
                               " x " + FormatFixed(s.size.z(), 2);
     const std::string inside = s.inside_fraction > 0 ? FormatFixed(s.inside_fraction, 3) : "-";
     const std::string time = s.seconds > 0 ? Progress::FormatDuration(s.seconds) : "-";
-    std::snprintf(line, sizeof(line), "%-*s  %-4s  %-22s  %7s  %7s  %s\n", int(name_width),
-                  s.name.c_str(), s.used ? "yes" : "no", size.c_str(), inside.c_str(),
+    const std::string fill = s.quality.box_fill > 0 ? FormatFixed(s.quality.box_fill, 2) : "-";
+    std::snprintf(line, sizeof(line), "%-*s  %-4s  %-22s  %7s  %5s  %7s  %s\n", int(name_width),
+                  s.name.c_str(), s.used ? "yes" : "no", size.c_str(), inside.c_str(), fill.c_str(),
                   time.c_str(), s.used ? s.file.c_str() : s.reject_reason.c_str());
     out << line;
+  }
+  // The quality gate: skipped and borderline models with their figures.
+  for (const TrainedShape& s : shapes) {
+    if (!s.used && s.quality.box_fill > 0 && !s.quality.pass) {
+      out << "skipped by the quality gate: " << s.name << " (" << s.quality.reason << ")\n";
+    }
+  }
+  for (const TrainedShape& s : shapes) {
+    if (s.used && s.quality.borderline) out << "borderline: " << s.name << " (" << s.quality.reason << ")\n";
   }
   out << "used " << num_used << " of " << shapes.size() << " models";
   if (eigenvalues.size() > 0) {
@@ -232,9 +257,11 @@ TrainSummary TrainShapeModel(const TrainOptions& options) {
         Sdf sdf = ComputeSdf(canonical.mesh, scan, options.grid, options.sdf, /*parallel=*/true);
         shape.inside_fraction = sdf.summary.inside_fraction;
         SAMP_CHECK(sdf.summary.sign_ok)
-            << "sign carving failed: inside fraction " << sdf.summary.inside_fraction
+            << "sign failed: inside fraction " << sdf.summary.inside_fraction
             << " below the minimum " << options.sdf.min_inside_fraction
             << " (open or inverted mesh, or not a car?)";
+        shape.quality = CheckSdfQuality(sdf, canonical.mesh.Bounds(), options.gate);
+        SAMP_CHECK(shape.quality.pass) << "SDF quality gate: " << shape.quality.reason;
         SAMP_CHECK(int64_t(sdf.values.size()) == options.grid.NumVoxels())
             << "SDF has " << sdf.values.size() << " values, expected "
             << options.grid.NumVoxels();

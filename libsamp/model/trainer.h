@@ -16,11 +16,15 @@ namespace samp {
 struct TrainOptions {
   std::string cad_folder;         // searched recursively for mesh files
   std::string manifest_path;      // optional JSON manifest ("" = none)
+  // Optional canonicalisation preset ("shapenet", "apollocar3d"; "" = none)
+  // for the files no manifest entry matches (CanonicalPreset, canonical.h).
+  std::string preset;
   std::string output_path;        // the model .vdb
   std::string sdf_folder;         // optional: one <name>.vdb SDF per model ("" = none)
   GridSpec grid = GridSpec::CarDefault();
   ScanOptions scan;
   SdfOptions sdf;
+  SdfQualityOptions gate;         // per-SDF quality gate (docs/training.md)
   PcaOptions pca;
   int num_threads = 0;            // 0 = all cores
   bool show_progress = true;
@@ -36,6 +40,7 @@ struct TrainedShape {
   double scale = 1.0;
   Eigen::Vector3d size = Eigen::Vector3d::Zero();  // length, height, width after canonicalisation
   double inside_fraction = 0.0;
+  SdfQuality quality;             // the gate's figures (when an SDF was computed)
   double seconds = 0.0;
 };
 

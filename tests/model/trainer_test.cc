@@ -167,6 +167,61 @@ TEST_F(TrainerTest, FailsClearlyWithTooFewUsableModels) {
   }
 }
 
+TEST_F(TrainerTest, QualityGateSkipsAShapeInTwoPiecesAndListsIt) {
+  // Two boxes 1.2 m apart: a 4.6 m "car" whose inside is two equal components.
+  Mesh twins = MakeBoxMesh(Eigen::Vector3d(-2.3, -0.9, 0.0), Eigen::Vector3d(-0.6, 0.9, 1.4));
+  twins.Append(MakeBoxMesh(Eigen::Vector3d(0.6, -0.9, 0.0), Eigen::Vector3d(2.3, 0.9, 1.4)));
+  ExportMesh((cad_ / "twins.obj").string(), twins);
+  const TrainSummary summary = TrainShapeModel(options_);
+  EXPECT_EQ(summary.num_used, 6) << summary.BriefReport();
+  const TrainedShape* shape = FindShape(summary, "twins");
+  ASSERT_NE(shape, nullptr);
+  EXPECT_FALSE(shape->used);
+  EXPECT_NE(shape->reject_reason.find("SDF quality gate: largest inside component share 0.5"), std::string::npos)
+      << shape->reject_reason;
+  EXPECT_NEAR(shape->quality.largest_component, 0.5, 0.02);
+  const std::string report = summary.BriefReport();
+  EXPECT_NE(report.find("skipped by the quality gate: twins (largest inside component share"), std::string::npos)
+      << report;
+  // The boxes that were used passed the gate, filling most of their box.
+  const TrainedShape* box0 = FindShape(summary, "box0");
+  ASSERT_NE(box0, nullptr);
+  EXPECT_TRUE(box0->quality.pass);
+  EXPECT_GT(box0->quality.box_fill, 0.6);
+  EXPECT_DOUBLE_EQ(box0->quality.largest_component, 1.0);
+}
+
+TEST_F(TrainerTest, ApolloCar3DPresetTrainsOnCarModelsJson) {
+  // car_models_json files: metres, x across, y down, front +z, 1-based faces.
+  const fs::path folder = root_ / "apollo" / "car_models_json";
+  fs::create_directories(folder);
+  const double sizes[4][3] = {{1.8, 1.5, 4.4}, {1.75, 1.45, 4.0}, {1.9, 1.7, 4.8}, {1.7, 1.4, 3.8}};
+  for (int c = 0; c < 4; ++c) {
+    const Eigen::Vector3d half(sizes[c][0] / 2, sizes[c][1] / 2, sizes[c][2] / 2);
+    const Mesh box = MakeBoxMesh(-half, half);
+    nlohmann::json j;
+    j["car_type"] = "test";
+    for (const Eigen::Vector3f& v : box.vertices) j["vertices"].push_back({v.x(), v.y(), v.z()});
+    for (const Eigen::Vector3i& t : box.triangles) j["faces"].push_back({t[0] + 1, t[1] + 1, t[2] + 1});
+    std::ofstream(folder / ("car" + std::to_string(c) + ".json")) << j.dump();
+  }
+  TrainOptions options = options_;
+  options.cad_folder = (root_ / "apollo").string();
+  options.manifest_path.clear();
+  options.sdf_folder.clear();
+  options.preset = "apollocar3d";
+  const TrainSummary summary = TrainShapeModel(options);
+  ASSERT_EQ(summary.num_used, 4) << summary.BriefReport();
+  const TrainedShape* car2 = FindShape(summary, "car2");
+  ASSERT_NE(car2, nullptr);
+  EXPECT_NEAR(car2->size.x(), 4.8, 1e-4);  // length from Apollo z
+  EXPECT_NEAR(car2->size.y(), 1.7, 1e-4);  // height from Apollo y
+  EXPECT_NEAR(car2->size.z(), 1.9, 1e-4);  // width from Apollo x
+  EXPECT_EQ(nlohmann::json::parse(ShapeModel::Load(options.output_path).options_json)["preset"], "apollocar3d");
+  options.preset = "kitti";
+  EXPECT_THROW(TrainShapeModel(options), Error);
+}
+
 TEST_F(TrainerTest, RejectsBadOptionsAndFolders) {
   TrainOptions options = options_;
   options.cad_folder = (root_ / "does_not_exist").string();

@@ -34,6 +34,11 @@ void RegisterTrainCommand(CLI::App* app) {
                       "JSON manifest: per file name, scale or target length, up/forward axes, "
                       "skip (docs/canonical_frame.md); without it axes are auto-detected")
       ->check(CLI::ExistingFile);
+  command->add_option("--preset", o.preset,
+                      "Canonicalisation of the files no manifest entry lists: shapenet "
+                      "(ShapeNetCore v2: +y up, front -z, unit diagonal -> 4.49 m) or apollocar3d "
+                      "(car_models_json: metres, y down, front +z); docs/canonical_frame.md")
+      ->check(CLI::IsMember({"shapenet", "apollocar3d"}));
   command->add_option("--sdf-dir", o.sdf_folder,
                       "Also write each model's SDF as <name>.vdb into this folder");
   command->add_option("-R,--components", o.pca.num_components,
