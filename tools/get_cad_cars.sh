@@ -6,6 +6,8 @@
 #                       vehicles/<body>_wrc/<body>_wrc.obj (Wavefront OBJ; wheels are separate
 #                       files and are not taken; the _kitcar/_super500 variants have the same
 #                       geometry and differ only in texture)
+# and adds the four road cars vendored in the repository (models/cad/: Gazebo hatchback, SUV,
+# pickup and Prius, CC BY 3.0, models/cad/README.md) under CACHE_DIR/cars/road/.
 #
 # Usage: tools/get_cad_cars.sh [CACHE_DIR]
 #   CACHE_DIR defaults to $SAMP_DATA_DIR/cad, or ~/.cache/samp/cad when SAMP_DATA_DIR is unset.
@@ -13,6 +15,7 @@
 # Result (the folder to train on is CACHE_DIR/cars):
 #   CACHE_DIR/cars/torcs/<name>.acc            the 17 TORCS bodies (main model, not the LODs)
 #   CACHE_DIR/cars/trigger/<body>_wrc.obj/.mtl the 3 Trigger Rally bodies
+#   CACHE_DIR/cars/road/gazebo_models/...      a copy of models/cad/gazebo_models (4 road cars)
 #   CACHE_DIR/cars/cad_manifest.json           a copy of models/cad_manifest.json
 #   CACHE_DIR/cars/SOURCES.txt                 package versions and SHA-256 of every file
 #   CACHE_DIR/debs, CACHE_DIR/extract          the downloaded packages and their contents
@@ -164,6 +167,15 @@ for body in "${trigger_bodies[@]}"; do
   done
 done
 
+# 4b. The road cars vendored in the repository (refreshed on every run).
+road_src="$root/models/cad/gazebo_models"
+[ -d "$road_src" ] || die "'$road_src' missing: the repository's vendored road cars (models/cad/)"
+rm -rf "$cars/road.tmp"
+mkdir -p "$cars/road.tmp"
+cp -r "$road_src" "$cars/road.tmp/gazebo_models" || die "cannot copy $road_src"
+rm -rf "$cars/road"
+mv "$cars/road.tmp" "$cars/road"
+
 # 5. The manifest beside the cars, and a record of where everything came from.
 if [ -f "$manifest_src" ]; then
   cmp -s "$manifest_src" "$cars/cad_manifest.json" || cp "$manifest_src" "$cars/cad_manifest.json"
@@ -175,18 +187,21 @@ fi
   for p in "${packages[@]}"; do
     echo "package $(cut -d' ' -f2- "$extract/$p.done")"
   done
-  (cd "$cars" && sha256sum torcs/*.acc trigger/*.obj trigger/*.mtl)
+  echo "road cars: models/cad/gazebo_models of the samp repository (CC BY 3.0, (c) 2012 Nathan Koenig, osrf/gazebo_models)"
+  (cd "$cars" && sha256sum torcs/*.acc trigger/*.obj trigger/*.mtl && find road -type f | sort | xargs sha256sum)
 } >"$cars/SOURCES.txt.tmp"
 mv "$cars/SOURCES.txt.tmp" "$cars/SOURCES.txt"
 
 # 6. Report.
 count_torcs=$(find "$cars/torcs" -maxdepth 1 -name "*.acc" | wc -l)
 count_trigger=$(find "$cars/trigger" -maxdepth 1 -name "*.obj" | wc -l)
+count_road=$(find "$cars/road" -path "*/meshes/*" \( -name "*.obj" -o -name "*.dae" \) | wc -l)
 say "cars in $cars:"
 (cd "$cars" && for f in torcs/*.acc trigger/*.obj; do
   printf '  %-24s %8d bytes\n' "$f" "$(stat -c %s "$f")"
 done)
 [ "$count_torcs" -eq ${#torcs_cars[@]} ] || die "expected ${#torcs_cars[@]} TORCS cars, found $count_torcs"
 [ "$count_trigger" -eq ${#trigger_bodies[@]} ] || die "expected ${#trigger_bodies[@]} Trigger Rally bodies, found $count_trigger"
-say "got $count_torcs TORCS cars and $count_trigger Trigger Rally bodies"
+[ "$count_road" -eq 4 ] || die "expected 4 road cars under $cars/road, found $count_road"
+say "got $count_torcs TORCS cars, $count_trigger Trigger Rally bodies and $count_road road cars"
 say "train with: samp train $cars --manifest $cars/cad_manifest.json -o MODEL.vdb"
