@@ -4,7 +4,8 @@
 // same mesh and grid; then a sign check on open / non-watertight meshes.
 //
 //   sdf_bench [--benchmark_filter=...] [--sdf_timing=0] [--sdf_report=0]
-//             [--sdf_cad_dir=CACHE_DIR/cars] [--sdf_corpus=0]   (runs single-threaded)
+//             [--sdf_cad_dir=CACHE_DIR/cars] [--sdf_corpus=0] [--sdf_cad_check=0]
+//             [--sdf_sign_check=0]                (runs single-threaded)
 // The cracked corpus (docs/sdf.md, "Cracked meshes") runs on the procedural
 // bodies and, with --sdf_cad_dir, on every car of the manifest not skipped.
 #include <benchmark/benchmark.h>
@@ -654,7 +655,7 @@ int main(int argc, char** argv) {
   //   --sdf_report=0      skip everything after the benchmarks (e.g. for profiling)
   //   --sdf_timing=0      skip the timing summary (OpenVDB's whole-grid SDF takes ~1 min)
   //   --sdf_cad_dir=DIR   also compare signs on the real CAD cars in DIR
-  bool report = true, timing = true, corpus = true;
+  bool report = true, timing = true, corpus = true, cad_check = true, sign_check = true;
   std::string cad_dir;
   int kept = 1;
   for (int a = 1; a < argc; ++a) {
@@ -665,6 +666,10 @@ int main(int argc, char** argv) {
       timing = false;
     } else if (arg == "--sdf_corpus=0") {
       corpus = false;
+    } else if (arg == "--sdf_cad_check=0") {
+      cad_check = false;
+    } else if (arg == "--sdf_sign_check=0") {
+      sign_check = false;
     } else if (arg.rfind("--sdf_cad_dir=", 0) == 0) {
       cad_dir = arg.substr(std::string("--sdf_cad_dir=").size());
     } else {
@@ -678,8 +683,8 @@ int main(int argc, char** argv) {
   benchmark::Shutdown();
   if (report && timing) samp::RunTimingSummary();
   if (report) samp::RunSignCost();
-  if (report) samp::RunSignCheck();
-  if (report && !cad_dir.empty()) samp::RunCadCheck(cad_dir);
+  if (report && sign_check) samp::RunSignCheck();
+  if (report && cad_check && !cad_dir.empty()) samp::RunCadCheck(cad_dir);
   if (report && corpus) samp::RunCrackedCorpus(cad_dir);
   return 0;
 }
