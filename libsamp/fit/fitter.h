@@ -14,7 +14,7 @@
 #include "libsamp/core/mesh.h"
 #include "libsamp/fit/motion_model.h"
 #include "libsamp/model/shape_lookup.h"
-#include "libsamp/fit/track.h"
+#include "libsamp/data/track.h"
 
 namespace samp {
 

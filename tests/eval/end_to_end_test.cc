@@ -7,7 +7,7 @@
 
 #include "libsamp/eval/evaluation.h"
 #include "libsamp/eval/synth.h"
-#include "libsamp/fit/run_fit.h"
+#include "libsamp/pipeline/run_fit.h"
 #include "libsamp/model/shape_model.h"
 #include "tests/eval/test_scene.h"
 

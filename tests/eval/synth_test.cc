@@ -12,8 +12,8 @@
 #include "libsamp/core/error.h"
 #include "libsamp/eval/evaluation.h"
 #include "libsamp/eval/synth.h"
-#include "libsamp/fit/kitti_io.h"
-#include "libsamp/fit/sequence.h"
+#include "libsamp/data/kitti_io.h"
+#include "libsamp/data/sequence.h"
 #include "tests/eval/test_scene.h"
 
 namespace samp {

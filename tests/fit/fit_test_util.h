@@ -12,7 +12,7 @@
 #include "libsamp/core/grid_spec.h"
 #include "libsamp/fit/motion_model.h"
 #include "libsamp/model/shape_lookup.h"
-#include "libsamp/fit/track.h"
+#include "libsamp/data/track.h"
 #include "libsamp/model/shape_model.h"
 
 namespace samp::testing {

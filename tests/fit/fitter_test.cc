@@ -11,7 +11,7 @@
 #include <random>
 
 #include "libsamp/core/error.h"
-#include "libsamp/fit/sequence.h"
+#include "libsamp/data/sequence.h"
 #include "libsamp/model/shape_model.h"
 #include "tests/fit/fit_test_util.h"
 

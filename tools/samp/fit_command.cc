@@ -5,7 +5,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
-#include "libsamp/fit/run_fit.h"
+#include "libsamp/pipeline/run_fit.h"
 #include "tools/samp/commands.h"
 
 #ifndef SAMP_DEFAULT_MODEL

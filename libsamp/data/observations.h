@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <opencv2/core.hpp>
 
-#include "libsamp/fit/track.h"
+#include "libsamp/data/track.h"
 
 namespace samp {
 

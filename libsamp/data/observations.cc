@@ -1,11 +1,11 @@
-#include "libsamp/fit/observations.h"
+#include "libsamp/data/observations.h"
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 
 #include "libsamp/core/error.h"
-#include "libsamp/fit/stereo.h"
+#include "libsamp/data/stereo.h"
 
 namespace samp {
 namespace {

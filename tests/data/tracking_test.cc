@@ -1,4 +1,4 @@
-#include "libsamp/fit/tracking.h"
+#include "libsamp/data/tracking.h"
 
 #include <gtest/gtest.h>
 
@@ -7,7 +7,7 @@
 #include <random>
 
 #include "libsamp/core/error.h"
-#include "libsamp/fit/observations.h"
+#include "libsamp/data/observations.h"
 
 namespace samp {
 namespace {

@@ -1,4 +1,4 @@
-#include "libsamp/fit/fit_output.h"
+#include "libsamp/pipeline/fit_output.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "libsamp/fit/tracking.h"
+#include "libsamp/data/tracking.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,8 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
-#include "libsamp/fit/kitti_io.h"
-#include "libsamp/fit/observations.h"
+#include "libsamp/data/kitti_io.h"
+#include "libsamp/data/observations.h"
 
 namespace samp {
 namespace {

@@ -13,11 +13,11 @@
 #include <string>
 #include <vector>
 
-#include "libsamp/fit/observations.h"
-#include "libsamp/fit/road_plane.h"
-#include "libsamp/fit/stereo.h"
-#include "libsamp/fit/track.h"
-#include "libsamp/fit/tracking.h"
+#include "libsamp/data/observations.h"
+#include "libsamp/data/road_plane.h"
+#include "libsamp/data/stereo.h"
+#include "libsamp/data/track.h"
+#include "libsamp/data/tracking.h"
 
 namespace samp {
 

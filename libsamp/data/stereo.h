@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "libsamp/fit/track.h"
+#include "libsamp/data/track.h"
 
 namespace samp {
 

@@ -1,4 +1,4 @@
-#include "libsamp/fit/road_plane.h"
+#include "libsamp/data/road_plane.h"
 
 #include <Eigen/Eigenvalues>
 #include <cmath>

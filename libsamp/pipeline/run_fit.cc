@@ -1,4 +1,4 @@
-#include "libsamp/fit/run_fit.h"
+#include "libsamp/pipeline/run_fit.h"
 
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
@@ -13,8 +13,8 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/ply_io.h"
-#include "libsamp/fit/fit_output.h"
-#include "libsamp/fit/kitti_io.h"
+#include "libsamp/pipeline/fit_output.h"
+#include "libsamp/data/kitti_io.h"
 #include "libsamp/model/shape_model.h"
 
 namespace samp {

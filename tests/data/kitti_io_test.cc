@@ -1,4 +1,4 @@
-#include "libsamp/fit/kitti_io.h"
+#include "libsamp/data/kitti_io.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>

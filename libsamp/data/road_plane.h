@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "libsamp/fit/stereo.h"
+#include "libsamp/data/stereo.h"
 
 namespace samp {
 

@@ -1,11 +1,11 @@
-#include "libsamp/fit/observations.h"
+#include "libsamp/data/observations.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "libsamp/core/error.h"
-#include "libsamp/fit/stereo.h"
+#include "libsamp/data/stereo.h"
 
 namespace samp {
 namespace {

@@ -10,7 +10,7 @@
 
 #include "libsamp/core/mesh.h"
 #include "libsamp/fit/fitter.h"
-#include "libsamp/fit/track.h"
+#include "libsamp/data/track.h"
 
 namespace samp {
 

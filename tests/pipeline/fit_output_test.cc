@@ -1,6 +1,6 @@
 // Outputs of a fit: KITTI result lines in each frame's camera, aligned
 // observations, the fitted surface and the JSON record.
-#include "libsamp/fit/fit_output.h"
+#include "libsamp/pipeline/fit_output.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "libsamp/fit/stereo.h"
+#include "libsamp/data/stereo.h"
 
 #include <cmath>
 #include <opencv2/calib3d.hpp>

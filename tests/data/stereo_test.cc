@@ -1,4 +1,4 @@
-#include "libsamp/fit/stereo.h"
+#include "libsamp/data/stereo.h"
 
 #include <gtest/gtest.h>
 

@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "libsamp/fit/track.h"
+#include "libsamp/data/track.h"
 
 namespace samp {
 

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "libsamp/fit/fitter.h"
-#include "libsamp/fit/sequence.h"
+#include "libsamp/data/sequence.h"
 
 namespace samp {
 

@@ -1,4 +1,4 @@
-#include "libsamp/fit/sequence.h"
+#include "libsamp/data/sequence.h"
 
 #include <tbb/parallel_for.h>
 
@@ -12,7 +12,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
-#include "libsamp/fit/kitti_io.h"
+#include "libsamp/data/kitti_io.h"
 
 namespace samp {
 namespace fs = std::filesystem;

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "libsamp/fit/track.h"
+#include "libsamp/data/track.h"
 
 namespace samp {
 
