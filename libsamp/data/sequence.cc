@@ -6,23 +6,17 @@
 #include <filesystem>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
-#include <regex>
 #include <set>
 #include <sstream>
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/data/kitti_io.h"
+#include "libsamp/data/sequence_layout.h"
 
 namespace samp {
 namespace fs = std::filesystem;
 namespace {
-
-std::string FrameTag(const std::string& name, int frame) {
-  std::ostringstream s;
-  s << name << '_' << (frame < 10 ? "0" : "") << frame;
-  return s.str();
-}
 
 // Frame numbers of the files "<name>_<ff><extension>" in `folder`, mapped to their paths.
 std::map<int, std::string> ListFrameFiles(const fs::path& folder, const std::string& name,
@@ -30,16 +24,10 @@ std::map<int, std::string> ListFrameFiles(const fs::path& folder, const std::str
   std::map<int, std::string> files;
   std::error_code error;
   if (!fs::is_directory(folder, error)) return files;
-  const std::regex pattern("^" + name + "_([0-9]+)\\" + extension + "$");
   for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
     if (!entry.is_regular_file()) continue;
-    const std::string file_name = entry.path().filename().string();
-    std::smatch match;
-    if (!std::regex_match(file_name, match, pattern)) continue;
-    const std::string digits = match[1].str();
-    SAMP_CHECK(digits.size() <= 6) << entry.path().string() << ": frame number '" << digits
-                                   << "' too long";
-    const int frame = std::stoi(digits);
+    const int frame = SequenceLayout::FrameOfFileName(entry.path().string(), name, extension);
+    if (frame < 0) continue;
     SAMP_CHECK(files.count(frame) == 0)
         << folder.string() << ": two files for frame " << frame << " ("
         << files[frame] << ", " << entry.path().string() << ")";
@@ -75,7 +63,7 @@ SequenceFiles ListSequence(const std::string& directory) {
   const fs::path root(directory);
   std::error_code error;
   SAMP_CHECK(fs::is_directory(root, error)) << "sequence directory " << directory << " does not exist";
-  const fs::path calib_dir = root / "calib";
+  const fs::path calib_dir = root / SequenceLayout::kCalibrationFolder;
   SAMP_CHECK(fs::is_directory(calib_dir, error))
       << "sequence " << directory << " has no calib/ folder (calib/<seq>.txt with P2 and P3)";
   std::vector<fs::path> calib_files;
@@ -98,14 +86,15 @@ SequenceFiles ListSequence(const std::string& directory) {
   files.directory = directory;
   files.name = calib.stem().string();
   files.calibration = calib.string();
-  const fs::path poses = root / "poses" / (files.name + ".txt");
-  if (fs::exists(poses, error)) files.poses = poses.string();
+  const SequenceLayout layout(directory, files.name);
+  const std::string poses = layout.Poses();
+  if (fs::exists(poses, error)) files.poses = poses;
 
-  const auto left = ListFrameFiles(root / "image_2", files.name, ".png");
-  const auto right = ListFrameFiles(root / "image_3", files.name, ".png");
-  const auto disparity = ListFrameFiles(root / "disparity", files.name, ".png");
-  const auto detections = ListFrameFiles(root / "detections", files.name, ".txt");
-  const auto planes = ListFrameFiles(root / "planes", files.name, ".txt");
+  const auto left = ListFrameFiles(layout.Folder(SequenceLayout::kLeftImageFolder), files.name, ".png");
+  const auto right = ListFrameFiles(layout.Folder(SequenceLayout::kRightImageFolder), files.name, ".png");
+  const auto disparity = ListFrameFiles(layout.Folder(SequenceLayout::kDisparityFolder), files.name, ".png");
+  const auto detections = ListFrameFiles(layout.Folder(SequenceLayout::kDetectionsFolder), files.name, ".txt");
+  const auto planes = ListFrameFiles(layout.Folder(SequenceLayout::kPlanesFolder), files.name, ".txt");
   std::set<int> numbers;
   for (const auto* m : {&left, &disparity, &detections})
     for (const auto& [frame, path] : *m) numbers.insert(frame);
@@ -172,7 +161,7 @@ std::vector<ObjectLabel> SequenceReader::ReadDetections(int index) const {
   SAMP_CHECK(index >= 0 && index < num_frames()) << "SequenceReader: frame index " << index << " out of range";
   const FrameFiles& f = files_.frames[index];
   SAMP_CHECK(!f.detections.empty())
-      << "sequence " << files_.directory << ": missing detections/" << FrameTag(files_.name, f.frame)
+      << "sequence " << files_.directory << ": missing detections/" << SequenceLayout::FrameTag(files_.name, f.frame)
       << ".txt (an empty file means no detections)";
   std::vector<ObjectLabel> kept;
   for (ObjectLabel& label : ReadLabels(f.detections)) {
@@ -186,7 +175,7 @@ std::vector<ObjectLabel> SequenceReader::ReadDetections(int index) const {
 SequenceFrame SequenceReader::ReadFrame(int index, bool with_detections) const {
   SAMP_CHECK(index >= 0 && index < num_frames()) << "SequenceReader: frame index " << index << " out of range";
   const FrameFiles& f = files_.frames[index];
-  const std::string tag = FrameTag(files_.name, f.frame);
+  const std::string tag = SequenceLayout::FrameTag(files_.name, f.frame);
   const cv::Size size(calibration_.camera.width, calibration_.camera.height);
   SequenceFrame frame;
   frame.frame = f.frame;

@@ -25,6 +25,7 @@
 #include "libsamp/pipeline/fit_output.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/sequence.h"
+#include "libsamp/data/sequence_layout.h"
 #include "libsamp/model/shape_lookup.h"
 #include "libsamp/model/shape_model.h"
 #include "libsamp/data/stereo.h"
@@ -40,12 +41,6 @@ namespace fs = std::filesystem;
 
 constexpr char kStereo[] = "stereo";
 constexpr char kDetections[] = "detections";
-
-std::string FrameFile(const std::string& seq, int frame, const char* extension) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%s_%02d%s", seq.c_str(), frame, extension);
-  return buffer;
-}
 
 std::string Fixed(double value, int digits) {
   char buffer[64];
@@ -310,9 +305,8 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
                                      std::set<std::string>* tracks) {
   const SequenceFiles files = ListSequence(directory);
   const std::string seq = files.name;
-  const fs::path gt = fs::path(directory) / "gt";
-  const std::vector<ObjectLabel> gt_labels =
-      ReadTrackingLabels((gt / "label_02" / (seq + ".txt")).string());
+  const SequenceLayout layout(directory, seq);
+  const std::vector<ObjectLabel> gt_labels = ReadTrackingLabels(layout.GroundTruthLabels());
   std::map<int, std::vector<ObjectLabel>> gt_by_frame;
   for (const ObjectLabel& l : gt_labels) gt_by_frame[l.frame].push_back(l);
   if (gt_by_frame.empty()) {
@@ -321,8 +315,7 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
   }
   // Image size from the first depth map.
   const cv::Mat first_depth =
-      ReadPngOfType((gt / "depth" / FrameFile(seq, gt_by_frame.begin()->first, ".png")).string(),
-                    CV_16UC1, cv::Size());
+      ReadPngOfType(layout.GroundTruthDepth(gt_by_frame.begin()->first), CV_16UC1, cv::Size());
   const StereoCalibration calibration =
       ReadCalibration(files.calibration, first_depth.cols, first_depth.rows);
   const PinholeCamera& camera = calibration.camera;
@@ -335,7 +328,7 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
     if (methods[m].name == kStereo) continue;
     if (methods[m].name == kDetections) {
       for (const auto& [frame, unused] : gt_by_frame) {
-        const fs::path path = fs::path(directory) / "detections" / FrameFile(seq, frame, ".txt");
+        const fs::path path = layout.Detections(frame);
         if (!fs::exists(path)) continue;
         for (ObjectLabel l : ReadLabels(path.string())) {
           if (!SameObjectType(l.type, "Car")) continue;
@@ -366,7 +359,7 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
   std::vector<Work> work;
   for (const auto& [frame, truths] : gt_by_frame) {
     const cv::Mat object_map =
-        ReadPngOfType((gt / "obj_map" / FrameFile(seq, frame, ".png")).string(), CV_8UC1, size);
+        ReadPngOfType(layout.GroundTruthObjectMap(frame), CV_8UC1, size);
     std::vector<Eigen::Vector4d> truth_boxes;
     for (const ObjectLabel& t : truths) truth_boxes.push_back(ProjectedBox(t, camera));
     std::vector<std::vector<int>> matches(methods.size());
@@ -423,8 +416,8 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
   for (const Work& w : work) {
     const int f = w.record.frame;
     if (!depths.count(f)) {
-      depths[f] = ReadPngOfType((gt / "depth" / FrameFile(seq, f, ".png")).string(), CV_16UC1, size);
-      const fs::path disparity = fs::path(directory) / "disparity" / FrameFile(seq, f, ".png");
+      depths[f] = ReadPngOfType(layout.GroundTruthDepth(f), CV_16UC1, size);
+      const fs::path disparity = layout.Disparity(f);
       if (options.stereo_baseline) {
         SAMP_CHECK(fs::exists(disparity)) << "eval: missing " << disparity.string()
                                           << " (needed by the stereo baseline)";

@@ -22,6 +22,7 @@
 #include "libsamp/core/progress.h"
 #include "libsamp/eval/procedural.h"
 #include "libsamp/data/kitti_io.h"
+#include "libsamp/data/sequence_layout.h"
 #include "libsamp/data/stereo.h"
 #include "libsamp/scan/canonical.h"
 #include "libsamp/scan/mesh_io.h"
@@ -474,12 +475,6 @@ void WriteImage(const std::string& path, const cv::Mat& image) {
   });
 }
 
-std::string FrameFile(const std::string& seq, int frame, const char* extension) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%s_%02d%s", seq.c_str(), frame, extension);
-  return buffer;
-}
-
 // The 3D box label of a car in the camera of one frame, 2D box from its projected vertices.
 // Returns false when no vertex lies in front of the camera or the box misses the image.
 bool MakeLabel(const SceneCar& car, int frame, const Eigen::Isometry3d& camera_from_world,
@@ -587,19 +582,19 @@ SynthSequenceInfo WriteSequence(const SynthOptions& options, const Scene& scene,
   info.folder = (fs::path(options.output_folder) / info.name).string();
   info.num_cars = int(scene.cars.size());
   const std::string seq = info.name;
-  const fs::path root(info.folder);
+  const SequenceLayout layout(info.folder, seq);
   const uint64_t seed = Mix(options.seed, uint64_t(sequence_index));
 
   StereoCalibration calibration;
   calibration.camera = camera;
   calibration.baseline = options.baseline;
-  WriteCalibration((root / "calib" / (seq + ".txt")).string(), calibration);
-  WritePoses((root / "poses" / (seq + ".txt")).string(), scene.world_from_camera);
+  WriteCalibration(layout.Calibration(), calibration);
+  WritePoses(layout.Poses(), scene.world_from_camera);
 
   // Ground-truth meshes (object frame) and car descriptions.
   nlohmann::json cars_json = nlohmann::json::array();
   for (const SceneCar& car : scene.cars) {
-    WritePly((root / "gt" / "meshes" / ("track_" + std::to_string(car.track_id) + ".ply")).string(),
+    WritePly(layout.GroundTruthMesh(car.track_id),
              car.car->mesh);
     cars_json.push_back({{"track_id", car.track_id},
                          {"car", car.car->name},
@@ -642,8 +637,8 @@ SynthSequenceInfo WriteSequence(const SynthOptions& options, const Scene& scene,
     const cv::Mat right_image =
         ShadeView(options, scene, t, scene.world_from_camera[t] * right_from_left.inverse(), camera,
                   right_buffers, Mix(seed, uint64_t(1001 + 2 * t)));
-    WriteImage((root / "image_2" / FrameFile(seq, t, ".png")).string(), left_image);
-    WriteImage((root / "image_3" / FrameFile(seq, t, ".png")).string(), right_image);
+    WriteImage(layout.LeftImage(t), left_image);
+    WriteImage(layout.RightImage(t), right_image);
 
     // Ground truth: depth (uint16, 1/256 m) and object map (uint8, track_id + 1).
     cv::Mat depth(camera.height, camera.width, CV_16UC1, cv::Scalar(0));
@@ -664,8 +659,8 @@ SynthSequenceInfo WriteSequence(const SynthOptions& options, const Scene& scene,
         }
       }
     }
-    WriteImage((root / "gt" / "depth" / FrameFile(seq, t, ".png")).string(), depth);
-    WriteImage((root / "gt" / "obj_map" / FrameFile(seq, t, ".png")).string(), object_map);
+    WriteImage(layout.GroundTruthDepth(t), depth);
+    WriteImage(layout.GroundTruthObjectMap(t), object_map);
 
     cv::Mat disparity;
     if (options.disparity == DisparitySource::kStereoSgbm) {
@@ -674,8 +669,8 @@ SynthSequenceInfo WriteSequence(const SynthOptions& options, const Scene& scene,
       disparity = TrueDisparityWithNoise(options, left_buffers, num_statics,
                                          Mix(seed, uint64_t(3000 + t)));
     }
-    WriteDisparity((root / "disparity" / FrameFile(seq, t, ".png")).string(), disparity);
-    WritePlane((root / "planes" / FrameFile(seq, t, ".txt")).string(),
+    WriteDisparity(layout.Disparity(t), disparity);
+    WritePlane(layout.Plane(t),
                Eigen::Vector4d(0.0, -1.0, 0.0, options.camera_height));
 
     Random detection_rng(Mix(seed, uint64_t(5000 + t)));
@@ -691,11 +686,11 @@ SynthSequenceInfo WriteSequence(const SynthOptions& options, const Scene& scene,
       detections.push_back(det);
     }
     info.num_detections += int(detections.size());
-    WriteLabels((root / "detections" / FrameFile(seq, t, ".txt")).string(), detections);
+    WriteLabels(layout.Detections(t), detections);
     if (progress) progress->Tick();
   }
   info.num_gt_labels = int(gt_labels.size());
-  WriteTrackingLabels((root / "gt" / "label_02" / (seq + ".txt")).string(), gt_labels);
+  WriteTrackingLabels(layout.GroundTruthLabels(), gt_labels);
   nlohmann::json scene_json = {{"sequence", seq},
                                {"seed", options.seed},
                                {"ego_speed", scene.ego_speed},
@@ -705,7 +700,7 @@ SynthSequenceInfo WriteSequence(const SynthOptions& options, const Scene& scene,
                                {"depth_png", "uint16, depth_m = value / 256, 0 = no surface"},
                                {"obj_map_png", "uint8, 0 = background, track_id + 1 = car"},
                                {"cars", cars_json}};
-  WriteTextFileAtomically((root / "gt" / "cars.json").string(), scene_json.dump(2) + "\n");
+  WriteTextFileAtomically(layout.GroundTruthCars(), scene_json.dump(2) + "\n");
   return info;
 }
 
