@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
 #include "libsamp/sdf/vdb_io.h"
 
@@ -142,19 +143,18 @@ void ShapeModel::Save(const std::string& path) const {
   meta[kFormatVersionKey] = std::to_string(kFormatVersion);
   meta[kNumComponentsKey] = std::to_string(num_components);
   meta[kEigenvaluesKey] =
-      nlohmann::json(std::vector<double>(eigenvalues.data(), eigenvalues.data() + num_components))
-          .dump();
-  meta[kTotalVarianceKey] = nlohmann::json(total_variance).dump();
-  meta[kTrainingShapesKey] = nlohmann::json(training_shapes).dump();
-  meta[kOptionsKey] = options.dump();
+      DumpJson(nlohmann::json(std::vector<double>(eigenvalues.data(), eigenvalues.data() + num_components)));
+  meta[kTotalVarianceKey] = DumpJson(nlohmann::json(total_variance));
+  meta[kTrainingShapesKey] = DumpJson(nlohmann::json(training_shapes));
+  meta[kOptionsKey] = DumpJson(options);
   meta[kChecksumKey] = ModelChecksum(mean, components, eigenvalues);
   WriteVdb(path, grid, grids, meta, /*background=*/0.0f);
 }
 
-ShapeModel ShapeModel::Load(const std::string& path) {
+ShapeModel ShapeModel::Load(const std::string& path, const VdbReadOptions& options) {
   GridSpec spec;
   VdbMetadata meta;
-  std::vector<DenseGrid> grids = ReadVdb(path, &spec, &meta);
+  std::vector<DenseGrid> grids = ReadVdb(path, &spec, &meta, options);
 
   const auto type_it = meta.find(kFileTypeKey);
   SAMP_CHECK(type_it != meta.end() || meta.count(kFormatVersionKey) > 0)
@@ -197,7 +197,7 @@ ShapeModel ShapeModel::Load(const std::string& path) {
                                  << " holds a non-string entry " << name.dump();
     model.training_shapes.push_back(name.get<std::string>());
   }
-  model.options_json = ParseJsonMeta(meta, path, kOptionsKey).dump();
+  model.options_json = DumpJson(ParseJsonMeta(meta, path, kOptionsKey));
 
   // Grids: mean and pc_0..pc_{R-1}, each exactly once; others are ignored.
   const int64_t dim = spec.NumVoxels();

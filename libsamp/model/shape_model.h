@@ -9,11 +9,14 @@
 #include <vector>
 
 #include "libsamp/core/grid_spec.h"
+#include "libsamp/sdf/vdb_io.h"
 
 namespace samp {
 
 struct ShapeModel {
-  static constexpr int kFormatVersion = 1;
+  // 2: the file carries a checksum of its payload, verified before decoding
+  // (docs/model_format.md); version 1 files are refused with that reason.
+  static constexpr int kFormatVersion = 2;
 
   GridSpec grid;
   Eigen::VectorXf mean;         // D = grid.NumVoxels(), x-fastest (GridSpec::Index)
@@ -41,8 +44,10 @@ struct ShapeModel {
   // Writes the model file atomically.
   void Save(const std::string& path) const;
   // Loads and validates a model file; a clear samp::Error on a missing,
-  // corrupt, truncated or mismatched file, or a .vdb that is not a samp model.
-  static ShapeModel Load(const std::string& path);
+  // corrupt, truncated or mismatched file, a .vdb that is not a samp model, or
+  // one whose grids would exceed `options` (checked before anything is decoded).
+  // Peak memory is about twice options.max_dense_bytes.
+  static ShapeModel Load(const std::string& path, const VdbReadOptions& options = VdbReadOptions());
 };
 
 }  // namespace samp

@@ -1,13 +1,18 @@
 #include "libsamp/sdf/vdb_io.h"
 
+#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Dense.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <mutex>
+#include <streambuf>
 #include <set>
 #include <sstream>
 
@@ -24,6 +29,11 @@ constexpr char kGridCountKey[] = "samp_grid_count";
 // Per-grid metadata: checksum of the dense values, so that a truncated or
 // corrupted file that OpenVDB itself reads without complaint is still caught.
 constexpr char kChecksumKey[] = "samp_checksum";
+// File metadata: the file's size (20 decimal digits) and FNV-1a 64 (16 hex
+// digits) of all its bytes, these two values read as '0' digits; filled in
+// after OpenVDB has written the file.
+constexpr char kFileBytesKey[] = "samp_file_bytes";
+constexpr char kFileChecksumKey[] = "samp_file_checksum";
 
 using DenseXyz = openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ>;
 
@@ -99,28 +109,368 @@ void DecomposeTransform(const openvdb::math::Transform& transform, const std::st
   *origin = Eigen::Vector3d(o.x(), o.y(), o.z());
 }
 
-std::vector<DenseGrid> ReadVdbImpl(const std::string& path, GridSpec* spec, VdbMetadata* metadata) {
+// ---- Bounded parsing of the parts OpenVDB would read unchecked ---------------
+//
+// OpenVDB's reader trusts every length in the file (a string length of 4 GB is
+// allocated, a negative chunk size overflows a buffer in bloscFromStream), so
+// samp reads the header, the file metadata and the grid descriptors itself and
+// verifies the file checksum before OpenVDB sees a byte.
+
+constexpr int64_t kVdbMagic = 0x56444220;  // OPENVDB_MAGIC ("VDB ")
+constexpr uint32_t kMinFileVersion = 222;  // OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION
+constexpr int kUuidBytes = 36;
+constexpr int32_t kMaxMetadataEntries = 4096;
+constexpr int32_t kMaxGrids = 100001;
+constexpr char kFloatTreeType[] = "Tree_float_5_4_3";
+constexpr int64_t kExpansionSlackBytes = int64_t(1) << 20;
+
+// Reads little-endian values from a byte buffer; every read is bounds-checked.
+class ByteReader {
+ public:
+  ByteReader(const std::string& bytes, const std::string& path) : bytes_(bytes), path_(path) {}
+
+  size_t pos() const { return pos_; }
+  size_t size() const { return bytes_.size(); }
+  void Seek(int64_t pos, const char* what) {
+    SAMP_CHECK(pos >= 0 && uint64_t(pos) <= bytes_.size())
+        << path_ << ": " << what << " points to byte " << pos << " of a " << bytes_.size()
+        << "-byte file (truncated or corrupt)";
+    pos_ = size_t(pos);
+  }
+  template <typename T>
+  T Read(const char* what) {
+    Need(sizeof(T), what);
+    T value;
+    std::memcpy(&value, bytes_.data() + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return value;
+  }
+  // A uint32 length and that many bytes (OpenVDB's writeString).
+  std::string ReadString(const char* what) { return ReadBytes(Read<uint32_t>(what), what); }
+  std::string ReadBytes(uint64_t n, const char* what) {
+    Need(n, what);
+    std::string value = bytes_.substr(pos_, size_t(n));
+    pos_ += size_t(n);
+    return value;
+  }
+  void Skip(uint64_t n, const char* what) {
+    Need(n, what);
+    pos_ += size_t(n);
+  }
+
+ private:
+  void Need(uint64_t n, const char* what) {
+    SAMP_CHECK(n <= bytes_.size() - pos_)
+        << path_ << ": truncated or corrupt file: " << what << " at byte " << pos_ << " needs "
+        << n << " bytes, " << (bytes_.size() - pos_) << " remain";
+  }
+
+  const std::string& bytes_;
+  const std::string& path_;
+  size_t pos_ = 0;
+};
+
+struct MetadataEntry {
+  std::string type;
+  std::string value;        // raw bytes (string metadata only)
+  size_t value_offset = 0;  // in the file
+  size_t value_size = 0;
+};
+using RawMetadata = std::map<std::string, MetadataEntry>;
+
+// OpenVDB's MetaMap::writeMeta: int32 count, then name, type name and a
+// uint32-sized value per entry.
+RawMetadata ReadRawMetadata(ByteReader* in, const std::string& path, const char* where) {
+  const int32_t count = in->Read<int32_t>("metadata count");
+  SAMP_CHECK(count >= 0 && count <= kMaxMetadataEntries)
+      << path << ": " << where << " holds " << count << " metadata entries (corrupt file?)";
+  RawMetadata meta;
+  for (int32_t i = 0; i < count; ++i) {
+    const std::string name = in->ReadString("metadata name");
+    MetadataEntry entry;
+    entry.type = in->ReadString("metadata type");
+    const uint32_t size = in->Read<uint32_t>("metadata size");
+    entry.value_offset = in->pos();
+    entry.value_size = size;
+    // Values are kept for string metadata (all samp writes at file level).
+    if (entry.type == "string") {
+      entry.value = in->ReadBytes(size, "metadata value");
+    } else {
+      in->Skip(size, "metadata value");
+    }
+    meta[name] = std::move(entry);
+  }
+  return meta;
+}
+
+// Header and file metadata of a .vdb; `payload_offset` is the first byte after them.
+struct VdbPrelude {
+  RawMetadata file_meta;
+  size_t payload_offset = 0;
+};
+
+VdbPrelude ReadPrelude(const std::string& bytes, const std::string& path) {
+  ByteReader in(bytes, path);
+  SAMP_CHECK(bytes.size() >= 8 && in.Read<int64_t>("magic number") == kVdbMagic)
+      << path << ": not a .vdb file (no OpenVDB magic number)";
+  const uint32_t file_version = in.Read<uint32_t>("file version");
+  SAMP_CHECK(file_version >= kMinFileVersion && file_version <= openvdb::OPENVDB_FILE_VERSION)
+      << path << ": OpenVDB file version " << file_version << ", samp reads " << kMinFileVersion
+      << " to " << openvdb::OPENVDB_FILE_VERSION;
+  in.Read<uint32_t>("library major version");
+  in.Read<uint32_t>("library minor version");
+  SAMP_CHECK(in.Read<char>("grid offsets flag") == 1)
+      << path << ": the file has no grid offsets (not written by samp)";
+  in.Skip(kUuidBytes, "UUID");
+  VdbPrelude prelude;
+  prelude.file_meta = ReadRawMetadata(&in, path, "the file");
+  prelude.payload_offset = in.pos();
+  return prelude;
+}
+
+const std::string* FindString(const RawMetadata& meta, const char* key) {
+  const auto it = meta.find(key);
+  if (it == meta.end() || it->second.type != "string") return nullptr;
+  return &it->second.value;
+}
+
+// FNV-1a 64 of `bytes`, the bytes of the metadata values of `blanks` read as '0'.
+uint64_t FileChecksum(const std::string& bytes, const RawMetadata& meta,
+                      std::initializer_list<const char*> blanks) {
+  std::vector<std::pair<size_t, size_t>> ranges;  // [begin, end), sorted
+  for (const char* key : blanks) {
+    const auto it = meta.find(key);
+    if (it != meta.end()) {
+      ranges.emplace_back(it->second.value_offset, it->second.value_offset + it->second.value_size);
+    }
+  }
+  std::sort(ranges.begin(), ranges.end());
+  uint64_t hash = 0xcbf29ce484222325ull;
+  auto add = [&hash](const char* data, size_t n, bool blank) {
+    for (size_t i = 0; i < n; ++i) {
+      const unsigned char c = blank ? '0' : static_cast<unsigned char>(data[i]);
+      hash = (hash ^ c) * 0x100000001b3ull;
+    }
+  };
+  size_t pos = 0;
+  for (const auto& [begin, end] : ranges) {
+    if (begin < pos || end > bytes.size()) continue;
+    add(bytes.data() + pos, begin - pos, false);
+    add(nullptr, end - begin, true);
+    pos = end;
+  }
+  add(bytes.data() + pos, bytes.size() - pos, false);
+  return hash;
+}
+
+std::string Hex64(uint64_t value) {
+  char buffer[17];
+  std::snprintf(buffer, sizeof(buffer), "%016llx", static_cast<unsigned long long>(value));
+  return buffer;
+}
+
+std::string Decimal20(uint64_t value) {
+  char buffer[21];
+  std::snprintf(buffer, sizeof(buffer), "%020llu", static_cast<unsigned long long>(value));
+  return buffer;
+}
+
+// Streams a byte buffer to OpenVDB without copying it (seekable, read-only).
+class MemoryBuffer : public std::streambuf {
+ public:
+  explicit MemoryBuffer(const std::string& bytes) {
+    char* begin = const_cast<char*>(bytes.data());
+    setg(begin, begin, begin + bytes.size());
+  }
+
+ protected:
+  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode which) override {
+    if (!(which & std::ios_base::in)) return pos_type(off_type(-1));
+    off_type base = dir == std::ios_base::beg ? 0 : dir == std::ios_base::cur ? gptr() - eback()
+                                                                              : egptr() - eback();
+    const off_type target = base + off;
+    if (target < 0 || target > egptr() - eback()) return pos_type(off_type(-1));
+    setg(eback(), eback() + target, egptr());
+    return pos_type(target);
+  }
+  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
+    return seekoff(off_type(pos), std::ios_base::beg, which);
+  }
+};
+
+// Everything samp checks before OpenVDB decodes a byte: the file checksum,
+// the grid descriptors, the announced sizes against the budget and file size.
+void ValidateBeforeDecoding(const std::string& bytes, const std::string& path,
+                            const VdbPrelude& prelude, const VdbReadOptions& options,
+                            VdbMetadata* meta_out, Eigen::Vector3i* dims_out) {
+  const RawMetadata& file_meta = prelude.file_meta;
+  const std::string* checksum = FindString(file_meta, kFileChecksumKey);
+  const std::string* file_bytes = FindString(file_meta, kFileBytesKey);
+  if (checksum == nullptr || file_bytes == nullptr) {
+    const std::string* version = FindString(file_meta, "samp_format_version");
+    if (version != nullptr && FindString(file_meta, "samp_file_type") != nullptr) {
+      SAMP_THROW() << path << ": a samp file of format version " << *version
+                   << ", written before samp checksummed its files; samp does not decode "
+                      "such files unverified: re-create it with this samp (samp train)";
+    }
+    SAMP_THROW() << path << ": not a samp .vdb file (no " << kFileChecksumKey
+                 << "): samp reads only files it wrote, since OpenVDB's decoder is not safe on "
+                    "unverified input";
+  }
+  SAMP_CHECK(*file_bytes == Decimal20(bytes.size()))
+      << path << ": the file should be " << *file_bytes << " bytes long but is "
+      << bytes.size() << " (truncated or corrupt)";
+  const std::string actual =
+      Hex64(FileChecksum(bytes, file_meta, {kFileBytesKey, kFileChecksumKey}));
+  SAMP_CHECK(*checksum == actual) << path << ": checksum mismatch (" << kFileChecksumKey << " = "
+                                  << *checksum << ", computed " << actual
+                                  << "): the file is corrupt";
+
+  // The bytes are what samp wrote; the announced sizes are still checked
+  // against the budget before anything is expanded.
+  VdbMetadata meta;
+  for (const auto& [name, entry] : file_meta) {
+    if (entry.type == "string") meta[name] = entry.value;
+  }
+  const auto dims_it = meta.find(kDimsKey);
+  SAMP_CHECK(dims_it != meta.end()) << path << ": metadata " << kDimsKey << " is missing";
+  int64_t dims[3];
+  SAMP_CHECK(ParseNumbers(dims_it->second, 3, dims))
+      << path << ": metadata " << kDimsKey << " = '" << dims_it->second
+      << "' is not three integers";
+  for (int a = 0; a < 3; ++a) {
+    SAMP_CHECK(dims[a] >= 1 && dims[a] <= (int64_t(1) << 20))
+        << path << ": metadata " << kDimsKey << " = '" << dims_it->second << "' is out of range";
+  }
+  const auto count_it = meta.find(kGridCountKey);
+  SAMP_CHECK(count_it != meta.end()) << path << ": metadata " << kGridCountKey << " is missing";
+  int64_t grid_count = 0;
+  SAMP_CHECK(ParseNumbers(count_it->second, 1, &grid_count) && grid_count >= 1 &&
+             grid_count < kMaxGrids)
+      << path << ": metadata " << kGridCountKey << " = '" << count_it->second
+      << "' is not a grid count";
+  const double voxels = double(dims[0]) * double(dims[1]) * double(dims[2]);
+  const double dense_bytes = voxels * double(grid_count) * sizeof(float);
+  SAMP_CHECK(dense_bytes <= double(options.max_dense_bytes))
+      << path << ": " << grid_count << " grids of " << dims[0] << " x " << dims[1] << " x "
+      << dims[2] << " voxels would take " << dense_bytes / double(1 << 20)
+      << " MiB, more than the memory budget of " << double(options.max_dense_bytes) / double(1 << 20)
+      << " MiB (VdbReadOptions::max_dense_bytes)";
+  SAMP_CHECK(dense_bytes <= options.max_expansion * double(bytes.size()) + kExpansionSlackBytes)
+      << path << ": " << grid_count << " grids of " << dims[0] << " x " << dims[1] << " x "
+      << dims[2] << " voxels (" << dense_bytes / double(1 << 20) << " MiB) from a "
+      << bytes.size() << "-byte file: more than " << options.max_expansion
+      << " times its size (corrupt file?)";
+
+  ByteReader in(bytes, path);
+  in.Seek(int64_t(prelude.payload_offset), "the grid count");
+  const int32_t num_grids = in.Read<int32_t>("grid count");
+  SAMP_CHECK(num_grids == grid_count)
+      << path << ": the file should hold " << grid_count << " grids but has " << num_grids
+      << " (truncated?)";
+  std::set<std::string> names;
+  int64_t previous_end = int64_t(in.pos());
+  for (int32_t g = 0; g < num_grids; ++g) {
+    const std::string name = in.ReadString("grid name");
+    const std::string type = in.ReadString("grid type");
+    const std::string parent = in.ReadString("grid instance parent");
+    SAMP_CHECK(!name.empty() && names.insert(name).second)
+        << path << ": grid " << g << " has an empty or repeated name";
+    SAMP_CHECK(type == kFloatTreeType) << path << ": grid '" << name << "' is of type '" << type
+                                       << "', expected " << kFloatTreeType;
+    SAMP_CHECK(parent.empty()) << path << ": grid '" << name << "' is an instance of another grid";
+    const int64_t grid_pos = in.Read<int64_t>("grid offset");
+    const int64_t block_pos = in.Read<int64_t>("grid block offset");
+    const int64_t end_pos = in.Read<int64_t>("grid end offset");
+    SAMP_CHECK(grid_pos >= int64_t(in.pos()) && block_pos >= grid_pos && end_pos >= block_pos &&
+               end_pos <= int64_t(bytes.size()) && grid_pos >= previous_end)
+        << path << ": grid '" << name << "' has inconsistent offsets";
+    in.Seek(grid_pos, "grid offset");
+    in.Read<uint32_t>("grid compression");
+    const RawMetadata grid_meta = ReadRawMetadata(&in, path, ("grid '" + name + "'").c_str());
+    // The active bounding box OpenVDB recorded (min > max: an empty grid).
+    int32_t box[2][3];
+    bool has_box = true;
+    const char* const box_keys[2] = {"file_bbox_min", "file_bbox_max"};
+    for (int m = 0; m < 2; ++m) {
+      const auto it = grid_meta.find(box_keys[m]);
+      if (it == grid_meta.end()) {
+        has_box = false;
+        continue;
+      }
+      SAMP_CHECK(it->second.type == "vec3i" && it->second.value_size == 12)
+          << path << ": grid '" << name << "' metadata " << box_keys[m] << " is not a vec3i";
+      ByteReader value(bytes, path);
+      value.Seek(int64_t(it->second.value_offset), box_keys[m]);
+      for (int a = 0; a < 3; ++a) box[m][a] = value.Read<int32_t>(box_keys[m]);
+    }
+    const bool empty_box = has_box && (box[0][0] > box[1][0] || box[0][1] > box[1][1] ||
+                                       box[0][2] > box[1][2]);
+    if (has_box && !empty_box) {
+      for (int a = 0; a < 3; ++a) {
+        SAMP_CHECK(box[0][a] >= 0 && box[1][a] < dims[a])
+            << path << ": grid '" << name << "' has active voxels " << box[0][a] << " to "
+            << box[1][a] << " along axis " << a << ", outside the " << dims_it->second << " grid";
+      }
+    }
+    const auto count = grid_meta.find("file_voxel_count");
+    if (count != grid_meta.end() && count->second.type == "int64" && count->second.value_size == 8) {
+      ByteReader value(bytes, path);
+      value.Seek(int64_t(count->second.value_offset), "file_voxel_count");
+      const int64_t n = value.Read<int64_t>("file_voxel_count");
+      SAMP_CHECK(n >= 0 && double(n) <= voxels)
+          << path << ": grid '" << name << "' announces " << n << " active voxels, the grid has "
+          << int64_t(voxels);
+    }
+    previous_end = end_pos;
+    in.Seek(end_pos, "grid end offset");
+  }
+  SAMP_CHECK(in.pos() == bytes.size())
+      << path << ": " << (bytes.size() - in.pos()) << " bytes after the last grid (corrupt file)";
+  *meta_out = std::move(meta);
+  *dims_out = Eigen::Vector3i(int(dims[0]), int(dims[1]), int(dims[2]));
+}
+
+std::string ReadWholeFile(const std::string& path, const VdbReadOptions& options) {
   namespace fs = std::filesystem;
   std::error_code ec;
   SAMP_CHECK(fs::is_regular_file(path, ec)) << "cannot read " << path << ": no such file";
+  const uintmax_t size = fs::file_size(path, ec);
+  SAMP_CHECK(!ec) << "cannot read " << path << ": " << ec.message();
+  SAMP_CHECK(size <= uintmax_t(options.max_dense_bytes + kExpansionSlackBytes))
+      << path << ": " << size << " bytes, more than the memory budget of "
+      << options.max_dense_bytes << " bytes (VdbReadOptions::max_dense_bytes) plus 1 MiB";
+  std::ifstream in(path, std::ios::binary);
+  SAMP_CHECK(in) << "cannot open " << path;
+  std::string bytes(size_t(size), '\0');
+  in.read(bytes.data(), std::streamsize(size));
+  SAMP_CHECK(in && in.gcount() == std::streamsize(size)) << "cannot read " << path;
+  SAMP_CHECK(in.peek() == std::ifstream::traits_type::eof())
+      << path << ": the file grew while it was read";
+  return bytes;
+}
 
-  openvdb::io::File file(path);
-  // No delayed loading: every read error must surface here, not lazily later.
-  file.open(/*delayLoad=*/false);
-  openvdb::MetaMap::Ptr file_meta = file.getMetadata();
-  openvdb::GridPtrVecPtr grids = file.getGrids();
-  file.close();
-  SAMP_CHECK(grids && !grids->empty()) << path << ": the file holds no grids";
-
+std::vector<DenseGrid> ReadVdbImpl(const std::string& path, GridSpec* spec, VdbMetadata* metadata,
+                                   const VdbReadOptions& options) {
+  options.Check();
+  const std::string bytes = ReadWholeFile(path, options);
+  const VdbPrelude prelude = ReadPrelude(bytes, path);
   VdbMetadata meta;
-  if (file_meta) {
-    for (auto it = file_meta->beginMeta(); it != file_meta->endMeta(); ++it) {
-      meta[it->first] = it->second ? it->second->str() : std::string();
-    }
-  }
+  GridSpec result;
+  ValidateBeforeDecoding(bytes, path, prelude, options, &meta, &result.dims);
+
+  // Verified: OpenVDB decodes the bytes samp wrote, from memory (not the path,
+  // which could have changed since).
+  MemoryBuffer buffer(bytes);
+  std::istream stream(&buffer);
+  openvdb::io::Stream archive(stream, /*delayLoad=*/false);
+  openvdb::GridPtrVecPtr grids = archive.getGrids();
+  SAMP_CHECK(grids && !grids->empty()) << path << ": the file holds no grids";
+  SAMP_CHECK(int64_t(grids->size()) == std::stoll(meta.at(kGridCountKey)))
+      << path << ": OpenVDB read " << grids->size() << " grids, the file announces "
+      << meta.at(kGridCountKey);
 
   // Grid geometry from the first grid's transform; all grids must share it.
-  GridSpec result;
   const std::string first_name = (*grids)[0]->getName();
   DecomposeTransform((*grids)[0]->transform(), path, first_name, &result.voxel_size,
                      &result.origin);
@@ -131,32 +481,6 @@ std::vector<DenseGrid> ReadVdbImpl(const std::string& path, GridSpec* spec, VdbM
     SAMP_CHECK(base->transform() == (*grids)[0]->transform())
         << path << ": grid '" << base->getName() << "' does not share the transform of grid '"
         << first_name << "'";
-  }
-
-  const auto count_it = meta.find(kGridCountKey);
-  if (count_it != meta.end()) {
-    SAMP_CHECK(count_it->second == std::to_string(grids->size()))
-        << path << ": the file should hold " << count_it->second << " grids but has "
-        << grids->size() << " (truncated?)";
-  }
-
-  const auto dims_it = meta.find(kDimsKey);
-  if (dims_it != meta.end()) {
-    int dims[3];
-    SAMP_CHECK(ParseNumbers(dims_it->second, 3, dims))
-        << path << ": metadata " << kDimsKey << " = '" << dims_it->second
-        << "' is not three integers";
-    result.dims = Eigen::Vector3i(dims[0], dims[1], dims[2]);
-  } else {
-    // A foreign file: the grid is the union of the active bounding boxes.
-    openvdb::CoordBBox bbox;
-    for (const auto& base : *grids) bbox.expand(base->evalActiveVoxelBoundingBox());
-    SAMP_CHECK(!bbox.empty()) << path << ": no " << kDimsKey
-                              << " metadata and no active voxels to derive the grid from";
-    const openvdb::Vec3d o = (*grids)[0]->transform().indexToWorld(bbox.min());
-    result.origin = Eigen::Vector3d(o.x(), o.y(), o.z());
-    const openvdb::Coord d = bbox.dim();
-    result.dims = Eigen::Vector3i(d.x(), d.y(), d.z());
   }
   const auto origin_it = meta.find(kOriginKey);
   if (origin_it != meta.end()) {
@@ -175,21 +499,15 @@ std::vector<DenseGrid> ReadVdbImpl(const std::string& path, GridSpec* spec, VdbM
     SAMP_THROW() << path << ": invalid grid: " << e.what();
   }
 
-  // Index offset of the dense box in the grids' index space (non-zero only
-  // for foreign files whose active box does not start at index 0).
-  const openvdb::Vec3d offset_world =
-      (*grids)[0]->transform().worldToIndex(openvdb::Vec3d(result.origin.x(), result.origin.y(),
-                                                           result.origin.z()));
-  const openvdb::Coord offset(int(std::lround(offset_world.x())), int(std::lround(offset_world.y())),
-                              int(std::lround(offset_world.z())));
-  const openvdb::CoordBBox bbox(offset, offset + openvdb::Coord(result.dims.x() - 1,
-                                                                result.dims.y() - 1,
-                                                                result.dims.z() - 1));
-
+  const openvdb::CoordBBox bbox = SpecBBox(result);
   std::vector<DenseGrid> out;
   out.reserve(grids->size());
   for (const auto& base : *grids) {
     const auto grid = openvdb::gridConstPtrCast<openvdb::FloatGrid>(base);
+    const openvdb::CoordBBox active = grid->evalActiveVoxelBoundingBox();
+    SAMP_CHECK(active.empty() || bbox.isInside(active))
+        << path << ": grid '" << grid->getName() << "' has active voxels outside the "
+        << meta.at(kDimsKey) << " grid";
     DenseGrid dense_grid;
     dense_grid.name = grid->getName();
     dense_grid.values.assign(size_t(result.NumVoxels()), grid->background());
@@ -206,6 +524,35 @@ std::vector<DenseGrid> ReadVdbImpl(const std::string& path, GridSpec* spec, VdbM
   if (spec != nullptr) *spec = result;
   if (metadata != nullptr) *metadata = std::move(meta);
   return out;
+}
+
+// Fills in the size and checksum of a file OpenVDB has just written
+// (their placeholders have the final length, so no offset moves).
+void SealPayload(const std::string& temporary, const std::string& path) {
+  std::string bytes;
+  {
+    std::ifstream in(temporary, std::ios::binary);
+    SAMP_CHECK(in) << "cannot write " << path << ": cannot reopen " << temporary;
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  const VdbPrelude prelude = ReadPrelude(bytes, temporary);
+  const auto size_it = prelude.file_meta.find(kFileBytesKey);
+  const auto checksum_it = prelude.file_meta.find(kFileChecksumKey);
+  SAMP_CHECK(size_it != prelude.file_meta.end() && checksum_it != prelude.file_meta.end())
+      << "cannot write " << path << ": checksum placeholders missing";
+  const std::string size_text = Decimal20(bytes.size());
+  const std::string checksum_text =
+      Hex64(FileChecksum(bytes, prelude.file_meta, {kFileBytesKey, kFileChecksumKey}));
+  SAMP_CHECK(size_it->second.value.size() == size_text.size() &&
+             checksum_it->second.value.size() == checksum_text.size())
+      << "cannot write " << path << ": checksum placeholders have the wrong length";
+  std::fstream out(temporary, std::ios::binary | std::ios::in | std::ios::out);
+  out.seekp(std::streamoff(size_it->second.value_offset));
+  out.write(size_text.data(), std::streamsize(size_text.size()));
+  out.seekp(std::streamoff(checksum_it->second.value_offset));
+  out.write(checksum_text.data(), std::streamsize(checksum_text.size()));
+  out.close();
+  SAMP_CHECK(out) << "cannot write " << path << ": error sealing " << temporary;
 }
 
 }  // namespace
@@ -256,6 +603,8 @@ void WriteVdb(const std::string& path, const GridSpec& spec, const std::vector<D
                                                            FormatDouble(spec.origin.z())));
   file_meta.insertMeta(kGridCountKey, openvdb::StringMetadata(std::to_string(grids.size())));
   file_meta.insertMeta(kVoxelSizeKey, openvdb::StringMetadata(FormatDouble(spec.voxel_size)));
+  file_meta.insertMeta(kFileBytesKey, openvdb::StringMetadata(Decimal20(0)));
+  file_meta.insertMeta(kFileChecksumKey, openvdb::StringMetadata(Hex64(0)));
 
   WriteFileAtomically(path, [&](const std::string& temporary) {
     try {
@@ -265,6 +614,7 @@ void WriteVdb(const std::string& path, const GridSpec& spec, const std::vector<D
                           openvdb::io::COMPRESS_ACTIVE_MASK);
       file.write(vdb_grids, file_meta);
       file.close();
+      SealPayload(temporary, path);
     } catch (const openvdb::Exception& e) {
       SAMP_THROW() << "cannot write " << path << ": " << e.what();
     } catch (const std::exception& e) {
@@ -273,10 +623,18 @@ void WriteVdb(const std::string& path, const GridSpec& spec, const std::vector<D
   });
 }
 
-std::vector<DenseGrid> ReadVdb(const std::string& path, GridSpec* spec, VdbMetadata* metadata) {
+void VdbReadOptions::Check() const {
+  SAMP_CHECK(max_dense_bytes > 0) << "VdbReadOptions: max_dense_bytes must be > 0, got "
+                                  << max_dense_bytes;
+  SAMP_CHECK(std::isfinite(max_expansion) && max_expansion >= 1.0)
+      << "VdbReadOptions: max_expansion must be >= 1, got " << max_expansion;
+}
+
+std::vector<DenseGrid> ReadVdb(const std::string& path, GridSpec* spec, VdbMetadata* metadata,
+                               const VdbReadOptions& options) {
   InitializeOpenVdb();
   try {
-    return ReadVdbImpl(path, spec, metadata);
+    return ReadVdbImpl(path, spec, metadata, options);
   } catch (const Error&) {
     throw;
   } catch (const openvdb::Exception& e) {

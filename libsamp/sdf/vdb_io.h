@@ -1,5 +1,13 @@
 // Dense grids <-> OpenVDB FloatGrids, and .vdb files (written atomically).
 // Only this layer and model/ include OpenVDB headers.
+//
+// Files written by WriteVdb carry their size and a checksum of all their bytes
+// in the file metadata. ReadVdb parses the header, the file metadata and the
+// grid descriptors itself with bounds checks, verifies size and checksum,
+// checks the announced grid sizes against a memory budget and the file size,
+// and only then hands the bytes to OpenVDB's decoder (which is not safe on
+// corrupt input). Files without the checksum (older samp files, other tools'
+// files) are refused. docs/model_format.md describes the layout.
 #pragma once
 
 #include <map>
@@ -19,6 +27,20 @@ struct DenseGrid {
 // String-valued metadata (numbers and JSON are stored as their text).
 using VdbMetadata = std::map<std::string, std::string>;
 
+// Limits ReadVdb checks before any grid is decoded.
+struct VdbReadOptions {
+  // Most bytes the dense values of all grids may take (4 bytes per voxel and
+  // grid); the decoded trees and the caller's copies take about as much again.
+  int64_t max_dense_bytes = int64_t(512) << 20;
+  // Most the dense values may exceed the file's size by (plus 1 MiB): samp's
+  // SDF grids are dense and compress about 1:1, so a file announcing far more
+  // is corrupt or hostile.
+  double max_expansion = 64.0;
+
+  // Throws samp::Error naming the field when an option is invalid.
+  void Check() const;
+};
+
 // Initialises OpenVDB once (thread-safe, idempotent).
 void InitializeOpenVdb();
 
@@ -28,9 +50,12 @@ void InitializeOpenVdb();
 void WriteVdb(const std::string& path, const GridSpec& spec, const std::vector<DenseGrid>& grids,
               const VdbMetadata& metadata, float background = 0.0f);
 
-// Reads every FloatGrid of a .vdb back onto `*spec` (derived from the first
-// grid's transform and the file metadata "samp_grid_dims"). Throws samp::Error
-// on a missing, corrupt, truncated or inconsistent file.
-std::vector<DenseGrid> ReadVdb(const std::string& path, GridSpec* spec, VdbMetadata* metadata);
+// Reads every FloatGrid of a .vdb written by WriteVdb back onto `*spec`
+// (derived from the first grid's transform and the file metadata
+// "samp_grid_dims"). Throws samp::Error naming the file on a missing, corrupt,
+// truncated, inconsistent or foreign file, or one exceeding `options`.
+// The returned metadata holds the file's string metadata, samp's reserved keys included.
+std::vector<DenseGrid> ReadVdb(const std::string& path, GridSpec* spec, VdbMetadata* metadata,
+                               const VdbReadOptions& options = VdbReadOptions());
 
 }  // namespace samp

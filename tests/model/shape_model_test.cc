@@ -378,9 +378,9 @@ TEST(ShapeModel, ForeignAndMismatchedVdbFilesGiveErrors) {
   auto write = [&](const std::vector<DenseGrid>& g, VdbMetadata m) { WriteVdb(broken, spec, g, m); };
 
   VdbMetadata m = meta;
-  m["samp_format_version"] = "2";
+  m["samp_format_version"] = "3";
   write(grids, m);
-  ExpectLoadError(broken, "format version 2");
+  ExpectLoadError(broken, "format version 3");
 
   m = meta;
   m["samp_num_components"] = "3";

@@ -191,45 +191,117 @@ TEST(VdbIo, ReservedMetadataKeysAreWrittenByWriteVdb) {
   EXPECT_EQ(read_spec, spec);
 }
 
-TEST(VdbIo, MismatchedTransformsAreAnError) {
-  InitializeOpenVdb();
-  const fs::path dir = TempDir("mismatch");
-  const std::string path = (dir / "mismatch.vdb").string();
-  openvdb::FloatGrid::Ptr a = openvdb::FloatGrid::create(0.0f);
-  a->setName("a");
-  a->tree().setValue(openvdb::Coord(1, 2, 3), 1.0f);
-  a->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
-  openvdb::FloatGrid::Ptr b = a->deepCopy();
-  b->setName("b");
-  b->setTransform(openvdb::math::Transform::createLinearTransform(0.2));
-  openvdb::io::File(path).write({a, b});
+std::string LoadError(const std::string& path, const VdbReadOptions& options = VdbReadOptions()) {
   try {
-    ReadVdb(path, nullptr, nullptr);
-    FAIL() << "expected samp::Error";
+    ReadVdb(path, nullptr, nullptr, options);
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("transform"), std::string::npos) << e.what();
+    return e.what();
   }
+  return "";
 }
 
-TEST(VdbIo, ForeignFileUsesTheActiveBoundingBox) {
+// OpenVDB's own reader is not safe on corrupt input, so files samp cannot
+// verify are refused before OpenVDB decodes them.
+TEST(VdbIo, FilesOfOtherToolsAreRefused) {
   InitializeOpenVdb();
   const fs::path dir = TempDir("foreign");
   const std::string path = (dir / "foreign.vdb").string();
   openvdb::FloatGrid::Ptr a = openvdb::FloatGrid::create(-1.0f);
   a->setName("a");
   a->tree().setValue(openvdb::Coord(2, -3, 4), 5.0f);
-  a->tree().setValue(openvdb::Coord(4, -1, 5), 6.0f);
   a->setTransform(openvdb::math::Transform::createLinearTransform(0.5));
-  openvdb::io::File(path).write({a});
+  openvdb::FloatGrid::Ptr b = a->deepCopy();
+  b->setName("b");
+  b->setTransform(openvdb::math::Transform::createLinearTransform(0.2));
+  openvdb::io::File(path).write({a, b});
+  const std::string error = LoadError(path);
+  EXPECT_NE(error.find("not a samp .vdb file"), std::string::npos) << error;
+  EXPECT_NE(error.find("foreign.vdb"), std::string::npos) << error;
+
+  // A samp file of format 1 (metadata as before the file checksum): named as such.
+  openvdb::MetaMap meta;
+  meta.insertMeta("samp_file_type", openvdb::StringMetadata("shape_model"));
+  meta.insertMeta("samp_format_version", openvdb::StringMetadata("1"));
+  openvdb::io::File(path).write({a}, meta);
+  const std::string old_error = LoadError(path);
+  EXPECT_NE(old_error.find("format version 1"), std::string::npos) << old_error;
+}
+
+// Every byte of the file is covered by the checksum: whichever byte changes,
+// the read fails with samp::Error before OpenVDB decodes anything.
+TEST(VdbIo, EveryChangedByteIsAnError) {
+  const fs::path dir = TempDir("every_byte");
+  const fs::path path = dir / "model.vdb";
+  GridSpec spec = TestSpec();
+  spec.dims = Eigen::Vector3i(5, 4, 3);
+  WriteVdb(path.string(), spec, TestGrids(spec), {{"source", "x"}});
+  const std::vector<char> original = ReadBytes(path);
+  ASSERT_NO_THROW(ReadVdb(path.string(), nullptr, nullptr));
+  const fs::path corrupt = dir / "corrupt.vdb";
+  // Every byte of the header and metadata, then every 7th (the file is ~35 kB).
+  for (size_t at = 0; at < original.size(); at += at < 3000 ? 1 : 7) {
+    std::vector<char> bytes = original;
+    bytes[at] = char(bytes[at] ^ (at % 7 == 0 ? 0x80 : 0x01));
+    WriteBytes(corrupt, bytes);
+    ASSERT_FALSE(LoadError(corrupt.string()).empty()) << "byte " << at << " went unnoticed";
+  }
+}
+
+TEST(VdbIo, EditedMetadataFailsTheChecksum) {
+  const fs::path dir = TempDir("edited");
+  const fs::path path = dir / "model.vdb";
+  const GridSpec spec = TestSpec();
+  WriteVdb(path.string(), spec, TestGrids(spec), {});
+  std::vector<char> bytes = ReadBytes(path);
+  const std::string text(bytes.begin(), bytes.end());
+  const size_t at = text.find("13 7 5");
+  ASSERT_NE(at, std::string::npos);
+  bytes[at] = '9';  // "93 7 5"
+  WriteBytes(path, bytes);
+  const std::string error = LoadError(path.string());
+  EXPECT_NE(error.find("checksum mismatch"), std::string::npos) << error;
+}
+
+TEST(VdbIo, GridsBeyondTheMemoryBudgetAreRefusedBeforeDecoding) {
+  const fs::path dir = TempDir("budget");
+  const std::string path = (dir / "model.vdb").string();
+  const GridSpec spec = TestSpec();  // 455 voxels, 3 grids: 5460 bytes
+  WriteVdb(path, spec, TestGrids(spec), {});
+  VdbReadOptions options;
+  options.max_dense_bytes = 5460;
+  EXPECT_NO_THROW(ReadVdb(path, nullptr, nullptr, options));
+  options.max_dense_bytes = 5459;
+  const std::string error = LoadError(path, options);
+  EXPECT_NE(error.find("memory budget"), std::string::npos) << error;
+  EXPECT_NE(error.find("13 x 7 x 5"), std::string::npos) << error;
+
+  options = VdbReadOptions();
+  options.max_dense_bytes = 0;
+  EXPECT_THROW(ReadVdb(path, nullptr, nullptr, options), Error);
+}
+
+// A constant grid is stored as a few tiles: 4 M voxels from a file of a few
+// kB, far beyond what a samp SDF compresses to.
+TEST(VdbIo, GridsFarLargerThanTheFileAreRefused) {
+  const fs::path dir = TempDir("expansion");
+  const std::string path = (dir / "tiles.vdb").string();
   GridSpec spec;
-  const auto grids = ReadVdb(path, &spec, nullptr);
-  EXPECT_EQ(spec.dims, Eigen::Vector3i(3, 3, 2));
-  EXPECT_TRUE(spec.origin.isApprox(Eigen::Vector3d(1.0, -1.5, 2.0)));
-  EXPECT_DOUBLE_EQ(spec.voxel_size, 0.5);
-  ASSERT_EQ(grids.size(), 1u);
-  EXPECT_EQ(grids[0].values[spec.Index(0, 0, 0)], 5.0f);
-  EXPECT_EQ(grids[0].values[spec.Index(2, 2, 1)], 6.0f);
-  EXPECT_EQ(grids[0].values[spec.Index(1, 1, 1)], -1.0f);
+  spec.dims = Eigen::Vector3i(160, 160, 160);
+  DenseGrid grid{"constant", std::vector<float>(size_t(spec.NumVoxels()), 1.0f)};
+  WriteVdb(path, spec, {grid}, {});
+  ASSERT_LT(fs::file_size(path), 100000u);
+  const std::string error = LoadError(path);
+  EXPECT_NE(error.find("times its size"), std::string::npos) << error;
+  VdbReadOptions options;
+  options.max_expansion = 1e6;
+  const auto read = ReadVdb(path, nullptr, nullptr, options);
+  ASSERT_EQ(read.size(), 1u);
+  EXPECT_EQ(read[0].values[12345], 1.0f);
+}
+
+TEST(VdbIo, NonRegularFilesAreNotRead) {
+  const fs::path dir = TempDir("non_regular");
+  EXPECT_NE(LoadError(dir.string()).find("no such file"), std::string::npos);
 }
 
 TEST(VdbIo, VdbPrintListsTheFile) {

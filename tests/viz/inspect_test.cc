@@ -118,7 +118,7 @@ TEST(Inspect, SummaryOfSphereModel) {
   std::vector<double> radii;
   const ShapeModel model = SphereModel(&sdfs, &radii);
   const std::string text = SummarizeModel(model, "spheres.vdb");
-  EXPECT_NE(text.find("format version 1"), std::string::npos) << text;
+  EXPECT_NE(text.find("format version 2"), std::string::npos) << text;
   EXPECT_NE(text.find("41 x 41 x 41 = 68921 voxels"), std::string::npos) << text;
   EXPECT_NE(text.find("components R     1"), std::string::npos) << text;
   EXPECT_NE(text.find("sphere_0, sphere_1, sphere_2, sphere_3, sphere_4"), std::string::npos) << text;
