@@ -157,6 +157,16 @@ struct EmbreeScene::Impl {
   }
 };
 
+namespace {
+// An Embree geometry reference released on scope exit (the scene keeps its own).
+struct GeometryRelease {
+  void operator()(RTCGeometry geometry) const {
+    if (geometry != nullptr) rtcReleaseGeometry(geometry);
+  }
+};
+using GeometryHandle = std::unique_ptr<RTCGeometryTy, GeometryRelease>;
+}  // namespace
+
 EmbreeScene::EmbreeScene(const std::vector<const Mesh*>& meshes) : impl_(std::make_unique<Impl>()) {
   impl_->device = rtcNewDevice(nullptr);
   if (impl_->device == nullptr) {
@@ -185,16 +195,18 @@ EmbreeScene::EmbreeScene(const std::vector<const Mesh*>& meshes) : impl_(std::ma
       SAMP_CHECK((t.array() >= 0).all() && (t.array().cast<int64_t>() < num_vertices).all())
           << "EmbreeScene: mesh " << id << " has a triangle index out of range";
     }
-    RTCGeometry geometry = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    // Owned until the scene holds it: every throw below releases it.
+    const GeometryHandle geometry(rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE));
     impl_->ThrowIfError("rtcNewGeometry");
+    SAMP_CHECK(geometry != nullptr) << "EmbreeScene: cannot create a geometry for mesh " << id;
     // Embree copies into buffers it owns; they outlive `mesh`.
     float* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
-        geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), num_vertices));
+        geometry.get(), RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+        num_vertices));
     unsigned* indices = static_cast<unsigned*>(
-        rtcSetNewGeometryBuffer(geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+        rtcSetNewGeometryBuffer(geometry.get(), RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                 3 * sizeof(unsigned), mesh->triangles.size()));
     if (vertices == nullptr || indices == nullptr) {
-      rtcReleaseGeometry(geometry);
       impl_->ThrowIfError("rtcSetNewGeometryBuffer");
       SAMP_THROW() << "EmbreeScene: cannot allocate geometry buffers for mesh " << id;
     }
@@ -208,9 +220,8 @@ EmbreeScene::EmbreeScene(const std::vector<const Mesh*>& meshes) : impl_(std::ma
     for (size_t f = 0; f < mesh->triangles.size(); ++f) {
       for (int c = 0; c < 3; ++c) indices[3 * f + c] = unsigned(mesh->triangles[f][c]);
     }
-    rtcCommitGeometry(geometry);
-    rtcAttachGeometryByID(impl_->scene, geometry, unsigned(id));
-    rtcReleaseGeometry(geometry);  // the scene holds it now
+    rtcCommitGeometry(geometry.get());
+    rtcAttachGeometryByID(impl_->scene, geometry.get(), unsigned(id));
     impl_->ThrowIfError("adding a triangle mesh");
   }
   rtcCommitScene(impl_->scene);

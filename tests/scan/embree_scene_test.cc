@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <random>
+#include <string>
 
 #include "libsamp/core/error.h"
 
@@ -75,6 +77,21 @@ TEST(EmbreeScene, RejectsBadIndices) {
   Mesh mesh = kUnitBox;
   mesh.triangles.push_back(Eigen::Vector3i(0, 1, 8));
   EXPECT_THROW(EmbreeScene{mesh}, Error);
+}
+
+// The geometry created before the check is released (ctest under
+// LeakSanitizer, SAMP_SANITIZE=address, reports it otherwise).
+TEST(EmbreeScene, RejectsNonFiniteVerticesWithoutLeaking) {
+  for (float bad : {std::numeric_limits<float>::infinity(), std::numeric_limits<float>::quiet_NaN()}) {
+    Mesh mesh = kUnitBox;
+    mesh.vertices[3].y() = bad;
+    try {
+      EmbreeScene scene({&kUnitBox, &mesh});
+      FAIL() << "expected samp::Error";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("non-finite vertex"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(EmbreeScene, OriginAndCameraPathsAgreeWithGeneralRays) {
