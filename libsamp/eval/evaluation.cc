@@ -19,6 +19,7 @@
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/progress.h"
 #include "libsamp/eval/metrics.h"
@@ -585,7 +586,7 @@ std::string EvalOptions::ToJson() const {
                             {"min_iou", min_iou},
                             {"stereo_baseline", stereo_baseline},
                             {"detection_baseline", detection_baseline}};
-  return j.dump(2);
+  return DumpJson(j, 2);
 }
 
 std::string EvalSummary::BriefReport() const {
@@ -828,7 +829,7 @@ EvalSummary Evaluate(const EvalOptions& options) {
     }
     j["pose"].push_back({{"method", p.method}, {"windows", windows}, {"matched", p.num_matched}});
   }
-  WriteTextFileAtomically((out / "results.json").string(), j.dump(2) + "\n");
+  WriteTextFileAtomically((out / "results.json").string(), DumpJson(j, 2) + "\n");
   WritePlots(options, summary);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;

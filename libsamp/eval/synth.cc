@@ -17,6 +17,7 @@
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/camera.h"
 #include "libsamp/core/error.h"
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/ply_io.h"
 #include "libsamp/core/progress.h"
@@ -700,7 +701,7 @@ SynthSequenceInfo WriteSequence(const SynthOptions& options, const Scene& scene,
                                {"depth_png", "uint16, depth_m = value / 256, 0 = no surface"},
                                {"obj_map_png", "uint8, 0 = background, track_id + 1 = car"},
                                {"cars", cars_json}};
-  WriteTextFileAtomically(layout.GroundTruthCars(), scene_json.dump(2) + "\n");
+  WriteTextFileAtomically(layout.GroundTruthCars(), DumpJson(scene_json, 2) + "\n");
   return info;
 }
 
@@ -855,7 +856,7 @@ std::string SynthOptions::ToJson() const {
       {"det_size_sigma", det_size_sigma},
       {"det_box_sigma_px", det_box_sigma_px},
       {"det_min_pixels", det_min_pixels}};
-  return j.dump(2);
+  return DumpJson(j, 2);
 }
 
 std::string SynthSummary::BriefReport() const {
@@ -886,7 +887,7 @@ SynthSummary SynthesizeSequences(const SynthOptions& options, const std::vector<
   nlohmann::json names = nlohmann::json::array();
   for (const SynthCar& car : cars) names.push_back(car.name);
   config["cars"] = names;
-  WriteTextFileAtomically((fs::path(options.output_folder) / "config.json").string(), config.dump(2) + "\n");
+  WriteTextFileAtomically((fs::path(options.output_folder) / "config.json").string(), DumpJson(config, 2) + "\n");
 
   SynthSummary summary;
   Progress progress("synth frames", int64_t(options.num_sequences) * options.num_frames,

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/progress.h"
 #include "libsamp/scan/canonical.h"
@@ -108,11 +109,11 @@ void SaveModelSdf(const std::string& path, const Sdf& sdf, const Job& job,
   meta["samp_file_type"] = "sdf";
   meta["samp_name"] = job.name;
   meta["samp_source_file"] = job.relative_path;
-  meta["samp_scale"] = nlohmann::json(canonical.scale).dump();
+  meta["samp_scale"] = DumpJson(nlohmann::json(canonical.scale));
   meta["samp_up"] = canonical.up;
   meta["samp_forward"] = canonical.forward;
-  meta["samp_size"] = Vector3Json(canonical.size).dump();
-  meta["samp_inside_fraction"] = nlohmann::json(sdf.summary.inside_fraction).dump();
+  meta["samp_size"] = DumpJson(Vector3Json(canonical.size));
+  meta["samp_inside_fraction"] = DumpJson(nlohmann::json(sdf.summary.inside_fraction));
   WriteVdb(path, sdf.grid, {DenseGrid{"sdf", sdf.values}}, meta);
 }
 
@@ -162,7 +163,7 @@ std::string TrainOptions::ToJson() const {
                {"min_closing_agreement", gate.min_closing_agreement},
                {"borderline_closing_agreement", gate.borderline_closing_agreement}};
   j["pca"] = {{"num_components", pca.num_components}};
-  return j.dump();
+  return DumpJson(j);
 }
 
 std::string TrainSummary::BriefReport() const {

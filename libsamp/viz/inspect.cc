@@ -17,6 +17,7 @@
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/scan/renderer.h"
@@ -214,7 +215,7 @@ std::string SummarizeModel(const ShapeModel& model, const std::string& path) {
   out << "  trainer options";
   try {
     const Json options = Json::parse(model.options_json);
-    std::istringstream pretty(options.dump(2));
+    std::istringstream pretty(DumpJson(options, 2));
     std::string text_line;
     out << "\n";
     while (std::getline(pretty, text_line)) out << "    " << text_line << "\n";
