@@ -1,7 +1,11 @@
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
@@ -88,6 +92,94 @@ TEST(AtomicFile, FailingWriterLeavesNothing) {
   std::string content;
   in >> content;
   EXPECT_EQ(content, "hello");
+  fs::remove_all(dir);
+}
+
+std::string ReadText(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// Symlinks, folders and devices are never replaced by a file.
+TEST(AtomicFile, RefusesTargetsThatAreNotRegularFiles) {
+  const fs::path dir = TempDir("atomic_targets");
+  const fs::path real = dir / "real.txt";
+  WriteTextFileAtomically(real.string(), "keep");
+  const fs::path link = dir / "link.txt";
+  fs::create_symlink(real, link);
+  fs::create_directories(dir / "folder.txt");
+  for (const fs::path& target : {link, dir / "folder.txt", fs::path("/dev/null")}) {
+    try {
+      WriteTextFileAtomically(target.string(), "new");
+      FAIL() << "expected samp::Error for " << target;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("samp replaces only regular files"), std::string::npos)
+          << e.what();
+    }
+  }
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_EQ(ReadText(real), "keep");
+  EXPECT_TRUE(fs::is_directory(dir / "folder.txt"));
+  fs::remove_all(dir);
+}
+
+// A temporary left by a process that no longer runs (kill -9) is removed by
+// the next write into that folder; one of a running process is kept.
+TEST(AtomicFile, RemovesOrphanTemporariesOfDeadProcesses) {
+  const fs::path dir = TempDir("atomic_orphans");
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);  // `child` no longer runs
+  const fs::path orphan = dir / (".tmp." + std::to_string(child) + ".0.tracks.json");
+  const fs::path alive = dir / (".tmp." + std::to_string(::getppid()) + ".3.tracks.json");
+  const fs::path unrelated = dir / ".tmp.notes";
+  for (const fs::path& p : {orphan, alive, unrelated}) std::ofstream(p) << "x";
+  EXPECT_EQ(RemoveOrphanTemporaries(dir.string()), 1);
+  EXPECT_FALSE(fs::exists(orphan));
+  EXPECT_TRUE(fs::exists(alive));
+  EXPECT_TRUE(fs::exists(unrelated));
+  fs::remove_all(dir);
+}
+
+// SIGTERM while a writer runs: the temporary goes, the target stays as it
+// was, and the process still ends by the signal.
+TEST(AtomicFile, SignalRemovesTheTemporaryOfARunningWriter) {
+  const fs::path dir = TempDir("atomic_signal");
+  const fs::path target = dir / "model.vdb";
+  WriteTextFileAtomically(target.string(), "old");
+  int ready[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    RemoveTemporariesOnSignal();
+    WriteFileAtomically(target.string(), [&](const std::string& temporary) {
+      std::ofstream(temporary) << "half";
+      const char byte = 1;
+      if (::write(ready[1], &byte, 1) != 1) ::_exit(3);
+      for (;;) ::pause();
+    });
+    ::_exit(4);
+  }
+  char byte = 0;
+  ASSERT_EQ(::read(ready[0], &byte, 1), 1);
+  ASSERT_EQ(::kill(child, SIGTERM), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << status;
+  int files = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    EXPECT_EQ(entry.path().filename(), "model.vdb") << "left behind: " << entry.path();
+    ++files;
+  }
+  EXPECT_EQ(files, 1);
+  EXPECT_EQ(ReadText(target), "old");
+  ::close(ready[0]);
+  ::close(ready[1]);
   fs::remove_all(dir);
 }
 

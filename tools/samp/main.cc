@@ -3,6 +3,7 @@
 #include <exception>
 #include <iostream>
 
+#include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "tools/samp/commands.h"
@@ -19,6 +20,8 @@ void AddCommonOptions(CLI::App* command) {
 }  // namespace samp::tools
 
 int main(int argc, char** argv) {
+  // SIGINT / SIGTERM remove the temporary files of outputs being written.
+  samp::RemoveTemporariesOnSignal();
   CLI::App app{
       "samp: shape and motion priors for 4D vehicle reconstruction from stereo video\n"
       "(after Engelmann, Stueckler and Leibe, WACV 2017). Run `samp COMMAND --help`."};
