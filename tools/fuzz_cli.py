@@ -1,0 +1,161 @@
+#!/usr/bin/env python3
+"""Mutation fuzzing of the samp command line on model files (docs/reliability.md).
+
+Runs `samp inspect MUTANT` (or another samp command line with {} for the
+file) on N mutants of a model file and checks each run: exit status 0 or 1
+(1 = samp's one-line "samp: error: ..."), never a signal, "unexpected error"
+(exit 2), a sanitizer report or more peak memory than --max-rss-mb. Mutations
+(seeded): flipped bits, random bytes, runs overwritten, cut files, inserted
+and deleted bytes, edited metadata numbers (grid dims, counts), the payload
+duplicated. Findings are copied to --findings. Prints a summary line and
+exits 1 on any finding.
+
+  python3 tools/fuzz_cli.py --samp build/tools/samp/samp --model models/samp_cars_r5.vdb \
+      --runs 20000 --jobs 2 --work /tmp/samp_fuzz_cli
+"""
+import argparse
+import os
+import random
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ThreadPoolExecutor
+
+
+def mutate(data: bytes, rng: random.Random) -> bytes:
+    b = bytearray(data)
+    kind = rng.randrange(8)
+    if kind == 0:  # flip 1-8 bits
+        for _ in range(rng.randint(1, 8)):
+            i = rng.randrange(len(b))
+            b[i] ^= 1 << rng.randrange(8)
+    elif kind == 1:  # random bytes
+        for _ in range(rng.randint(1, 16)):
+            b[rng.randrange(len(b))] = rng.randrange(256)
+    elif kind == 2:  # overwrite a run with one value
+        i = rng.randrange(len(b))
+        n = rng.randint(1, 4096)
+        v = rng.choice([0, 0xFF, 0x7F, 0x80, rng.randrange(256)])
+        b[i:i + n] = bytes([v]) * len(b[i:i + n])
+    elif kind == 3:  # cut
+        b = b[:rng.randrange(len(b))]
+    elif kind == 4:  # insert bytes
+        i = rng.randrange(len(b))
+        b[i:i] = bytes(rng.randrange(256) for _ in range(rng.randint(1, 64)))
+    elif kind == 5:  # delete bytes
+        i = rng.randrange(len(b))
+        del b[i:i + rng.randint(1, 64)]
+    elif kind == 6:  # edit a decimal number in the metadata (dims, counts, R)
+        text = bytes(b[:4096])
+        numbers = [m for m in re.finditer(rb"\d+", text)]
+        if numbers:
+            m = rng.choice(numbers)
+            new = str(rng.choice([0, 1, 2, 1200, 65535, 2**31 - 1, 2**32, 10**12,
+                                  int(m.group()) + 1])).encode()
+            if rng.random() < 0.5:  # keep the length when possible
+                new = new[:len(m.group())].rjust(len(m.group()), b"0")
+            b[m.start():m.end()] = new
+    else:  # a 4- or 8-byte little-endian integer set to an extreme
+        i = rng.randrange(max(1, len(b) - 8))
+        width = rng.choice([4, 8])
+        v = rng.choice([0, 1, 2**31 - 1, 2**31, 2**32 - 1, 2**63 - 1, 2**63, 2**64 - 1])
+        b[i:i + width] = (v % (1 << (8 * width))).to_bytes(width, "little")
+    return bytes(b)
+
+
+def run_one(args, index, data, work):
+    rng = random.Random(args.seed * 1000003 + index)
+    mutant = mutate(data, rng)
+    path = os.path.join(work, f"mutant_{index % (4 * args.jobs)}_{index}.vdb")
+    with open(path, "wb") as f:
+        f.write(mutant)
+    command = [part.replace("{}", path) for part in args.command]
+    start = time.time()
+    proc = subprocess.Popen([args.samp] + command, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE)
+    try:
+        _, err = proc.communicate(timeout=args.timeout)
+        timed_out = False
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        _, err = proc.communicate()
+        timed_out = True
+    # ru_maxrss of the child (kB) via /proc is gone after exit; wait4 gave it to Popen.
+    rss_mb = getattr(proc, "rss_kb", 0) / 1024.0
+    err = err.decode("utf-8", "replace")
+    finding = None
+    if timed_out:
+        finding = "timeout"
+    elif proc.returncode < 0:
+        finding = f"signal {-proc.returncode}"
+    elif proc.returncode not in (0, 1):
+        finding = f"exit {proc.returncode}"
+    elif "Sanitizer" in err or "runtime error:" in err:
+        finding = "sanitizer report"
+    elif proc.returncode == 1 and not err.startswith("samp: error: "):
+        finding = "error without samp's one-line message"
+    elif rss_mb > args.max_rss_mb:
+        finding = f"peak RSS {rss_mb:.0f} MB"
+    if finding:
+        os.makedirs(args.findings, exist_ok=True)
+        shutil.copy(path, os.path.join(args.findings, f"finding_{index}.vdb"))
+        with open(os.path.join(args.findings, f"finding_{index}.txt"), "w") as f:
+            f.write(f"{finding}\n{' '.join(command)}\n{err}\n")
+    os.remove(path)
+    return proc.returncode, finding, rss_mb, time.time() - start
+
+
+class RusagePopen(subprocess.Popen):
+    """Popen that records the child's peak RSS from wait4."""
+
+    def _try_wait(self, wait_flags):
+        try:
+            pid, status, usage = os.wait4(self.pid, wait_flags)
+        except ChildProcessError:
+            pid, status = self.pid, 0
+            usage = None
+        if pid == self.pid and usage is not None:
+            self.rss_kb = usage.ru_maxrss
+        return (pid, status)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--samp", required=True, help="the samp executable")
+    parser.add_argument("--model", required=True, help="the model file to mutate")
+    parser.add_argument("--runs", type=int, default=1000)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--timeout", type=float, default=120.0, help="seconds per run")
+    parser.add_argument("--max-rss-mb", type=float, default=1024.0)
+    parser.add_argument("--work", default=None, help="folder for the mutants (default: a temporary one)")
+    parser.add_argument("--findings", default="fuzz_cli_findings")
+    parser.add_argument("command", nargs="*", default=["inspect", "{}"],
+                        help="samp arguments, {} = the mutant (default: inspect {})")
+    args = parser.parse_args()
+    subprocess.Popen = RusagePopen
+    with open(args.model, "rb") as f:
+        data = f.read()
+    work = args.work or tempfile.mkdtemp(prefix="samp_fuzz_cli_")
+    os.makedirs(work, exist_ok=True)
+    counts = {}
+    findings = 0
+    peak = 0.0
+    start = time.time()
+    with ThreadPoolExecutor(max_workers=args.jobs) as pool:
+        for code, finding, rss, _ in pool.map(lambda i: run_one(args, i, data, work), range(args.runs)):
+            counts[code] = counts.get(code, 0) + 1
+            peak = max(peak, rss)
+            if finding:
+                findings += 1
+                print(f"finding: {finding}", file=sys.stderr)
+    print(f"fuzz_cli: {args.runs} runs of samp {' '.join(args.command)} in {time.time() - start:.0f} s, "
+          f"exit codes {dict(sorted(counts.items()))}, peak RSS {peak:.0f} MB, {findings} findings")
+    return 1 if findings else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
