@@ -173,7 +173,7 @@ TEST(AtomicFile, SignalRemovesTheTemporaryOfARunningWriter) {
   EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM) << status;
   int files = 0;
   for (const auto& entry : fs::directory_iterator(dir)) {
-    EXPECT_EQ(entry.path().filename(), "model.vdb") << "left behind: " << entry.path();
+    EXPECT_EQ(entry.path().filename().string(), "model.vdb") << "left behind: " << entry.path().string();
     ++files;
   }
   EXPECT_EQ(files, 1);
