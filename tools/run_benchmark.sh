@@ -141,7 +141,7 @@ step "fit_single" "$samp" fit --model "$model" "${seq_args[@]}" --single-frame \
 rm -rf "$work/eval"
 step "eval" "$samp" eval "${seq_args[@]}" --result "full=$work/fit_full" \
   --result "full-ray=$work/fit_full_ray" --result "single-frame=$work/fit_single" \
-  --out "$work/eval" --threads "$threads" -q
+  --out "$work/eval" --threads "$threads" --pictures -q
 total=$(( $(date +%s) - total_start ))
 echo "run_benchmark: total $total s" | tee -a "$log"
 cat "$work/eval/results.md"

@@ -2,6 +2,9 @@
 
 #include <cstring>
 #include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
@@ -81,6 +84,61 @@ void WritePly(const std::string& path, const PointCloud& cloud) {
     }
     Finish(out, temporary);
   });
+}
+
+PointCloud ReadPointCloudPly(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  SAMP_CHECK(in) << "cannot open " << path;
+  std::string line;
+  std::getline(in, line);
+  SAMP_CHECK(line == "ply") << path << ": not a PLY file";
+  std::vector<std::string> properties;
+  long long num_vertices = -1;
+  bool binary_le = false, in_vertex = false;
+  while (std::getline(in, line)) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line == "end_header") break;
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "format") {
+      std::string format;
+      words >> format;
+      binary_le = format == "binary_little_endian";
+    } else if (keyword == "element") {
+      std::string name;
+      long long count = 0;
+      words >> name >> count;
+      SAMP_CHECK(words && count >= 0) << path << ": malformed line \"" << line << "\"";
+      in_vertex = name == "vertex";
+      if (in_vertex) {
+        num_vertices = count;
+      } else {
+        SAMP_CHECK(count == 0) << path << ": element " << name << " is not supported in a point cloud";
+      }
+    } else if (keyword == "property" && in_vertex) {
+      std::string type, name;
+      words >> type >> name;
+      properties.push_back(type + " " + name);
+    }
+  }
+  SAMP_CHECK(in) << path << ": no end_header";
+  SAMP_CHECK(binary_le) << path << ": only binary_little_endian PLY is read";
+  SAMP_CHECK(num_vertices >= 0) << path << ": no vertex element";
+  const std::vector<std::string> xyz = {"float x", "float y", "float z"};
+  const std::vector<std::string> xyzrgb = {"float x", "float y", "float z", "uchar red", "uchar green", "uchar blue"};
+  const bool has_colors = properties == xyzrgb;
+  SAMP_CHECK(has_colors || properties == xyz)
+      << path << ": vertex properties must be float x y z [uchar red green blue]";
+  PointCloud cloud;
+  cloud.points.resize(size_t(num_vertices));
+  if (has_colors) cloud.colors.resize(size_t(num_vertices));
+  for (long long i = 0; i < num_vertices; ++i) {
+    in.read(reinterpret_cast<char*>(cloud.points[size_t(i)].data()), 3 * sizeof(float));
+    if (has_colors) in.read(reinterpret_cast<char*>(cloud.colors[size_t(i)].data()), 3);
+    SAMP_CHECK(in) << path << ": truncated after " << i << " of " << num_vertices << " points";
+  }
+  return cloud;
 }
 
 }  // namespace samp

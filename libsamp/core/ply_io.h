@@ -11,4 +11,10 @@ namespace samp {
 void WritePly(const std::string& path, const Mesh& mesh);
 void WritePly(const std::string& path, const PointCloud& cloud);
 
+// Reads a point cloud written by WritePly (binary little-endian, vertex
+// element with float x y z and optional uchar red green blue, in that order;
+// other elements must be empty). Throws samp::Error naming the file when it
+// is missing, truncated or of another layout.
+PointCloud ReadPointCloudPly(const std::string& path);
+
 }  // namespace samp

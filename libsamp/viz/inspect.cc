@@ -391,6 +391,13 @@ std::vector<Eigen::Vector3f> SampleSurface(const Mesh& mesh, int count, uint64_t
 DistanceStats NearestDistances(const std::vector<Eigen::Vector3f>& from,
                                const std::vector<Eigen::Vector3f>& to) {
   if (from.empty() || to.empty()) return DistanceStats();
+  return StatsOf(NearestDistanceEach(from, to));
+}
+
+std::vector<double> NearestDistanceEach(const std::vector<Eigen::Vector3f>& from,
+                                        const std::vector<Eigen::Vector3f>& to) {
+  if (to.empty()) return std::vector<double>(from.size(), std::numeric_limits<double>::infinity());
+  if (from.empty()) return {};
   // Uniform bucket grid over `to`, about 100 cells along the longest side.
   Eigen::Vector3f lo = to[0], hi = to[0];
   for (const auto& p : to) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
@@ -447,7 +454,7 @@ DistanceStats NearestDistances(const std::vector<Eigen::Vector3f>& from,
       distances[q] = std::sqrt(double(best));
     }
   });
-  return StatsOf(std::move(distances));
+  return distances;
 }
 
 namespace {

@@ -138,6 +138,9 @@ std::vector<Eigen::Vector3f> SampleSurface(const Mesh& mesh, int count, uint64_t
 // For every point of `from`, the distance to the nearest point of `to`.
 DistanceStats NearestDistances(const std::vector<Eigen::Vector3f>& from,
                                const std::vector<Eigen::Vector3f>& to);
+// The same distances one by one (inf for every point when `to` is empty).
+std::vector<double> NearestDistanceEach(const std::vector<Eigen::Vector3f>& from,
+                                        const std::vector<Eigen::Vector3f>& to);
 
 // ---- Pictures -------------------------------------------------------------------
 

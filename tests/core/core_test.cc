@@ -3,9 +3,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
@@ -201,6 +203,54 @@ TEST(PlyIo, WritesHeaderAndBinaryBody) {
   cloud.colors.push_back({1, 2, 3});
   cloud.colors.push_back({1, 2, 3});
   EXPECT_THROW(WritePly((dir / "bad.ply").string(), cloud), Error);
+  fs::remove_all(dir);
+}
+
+TEST(PlyIo, PointCloudRoundTripsWithAndWithoutColours) {
+  const fs::path dir = TempDir("ply_points");
+  PointCloud cloud;
+  for (int i = 0; i < 50; ++i) {
+    // 10/256 as x puts a newline byte first: the writer swaps a safe point to the front.
+    cloud.points.emplace_back(i == 0 ? 10.0f / 256.0f : 0.5f * i, -1.25f * i, 3.0f);
+    cloud.colors.push_back({uint8_t(i), 64, uint8_t(255 - i)});
+  }
+  WritePly((dir / "c.ply").string(), cloud);
+  const PointCloud read = ReadPointCloudPly((dir / "c.ply").string());
+  ASSERT_EQ(read.points.size(), cloud.points.size());
+  ASSERT_EQ(read.colors.size(), cloud.colors.size());
+  // The writer may reorder points (SafeFirstVertex): compare as sets of (point, colour).
+  auto key = [](const Eigen::Vector3f& p, const Eigen::Matrix<uint8_t, 3, 1>& c) {
+    return std::make_tuple(p.x(), p.y(), p.z(), int(c[0]), int(c[1]), int(c[2]));
+  };
+  std::vector<std::tuple<float, float, float, int, int, int>> a, b;
+  for (size_t i = 0; i < cloud.points.size(); ++i) a.push_back(key(cloud.points[i], cloud.colors[i]));
+  for (size_t i = 0; i < read.points.size(); ++i) b.push_back(key(read.points[i], read.colors[i]));
+  std::sort(a.begin(), a.end());
+  std::sort(b.begin(), b.end());
+  EXPECT_EQ(a, b);
+  cloud.colors.clear();
+  WritePly((dir / "p.ply").string(), cloud);
+  EXPECT_EQ(ReadPointCloudPly((dir / "p.ply").string()).points.size(), 50u);
+  EXPECT_TRUE(ReadPointCloudPly((dir / "p.ply").string()).colors.empty());
+  // A mesh file is not a point cloud; a truncated file is named.
+  WritePly((dir / "m.ply").string(), MakeBoxMesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1)));
+  EXPECT_THROW(ReadPointCloudPly((dir / "m.ply").string()), Error);
+  std::string bytes;
+  {
+    std::ifstream in((dir / "c.ply").string(), std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  }
+  {
+    std::ofstream out((dir / "t.ply").string(), std::ios::binary);
+    out << bytes.substr(0, bytes.size() - 7);
+  }
+  try {
+    ReadPointCloudPly((dir / "t.ply").string());
+    ADD_FAILURE() << "no error for a truncated file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ReadPointCloudPly((dir / "missing.ply").string()), Error);
   fs::remove_all(dir);
 }
 

@@ -5,6 +5,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/eval/evaluation.h"
+#include "libsamp/viz/fit_pictures.h"
 #include "tools/samp/commands.h"
 
 namespace samp::tools {
@@ -14,6 +15,7 @@ void RegisterEvalCommand(CLI::App* app) {
     EvalOptions options;
     std::vector<std::string> results;
     bool no_stereo = false, no_detections = false;
+    bool pictures = false;
   };
   auto args = std::make_shared<Args>();
   EvalOptions& o = args->options;
@@ -45,6 +47,9 @@ void RegisterEvalCommand(CLI::App* app) {
   command->add_flag("--no-stereo", args->no_stereo, "Leave out the raw-stereo shape baseline");
   command->add_flag("--no-detections", args->no_detections, "Leave out the input-detection pose baseline");
   command->add_option("--threads", o.num_threads, "Worker threads (0 = all cores)")->capture_default_str();
+  command->add_flag("--pictures", args->pictures,
+                    "Per result and car: the fitted surface coloured by its distance to the true one "
+                    "at --tau (OUT/error_surfaces/NAME/<seq>/track_<id>_error.png)");
   AddCommonOptions(command);
   command->callback([args] {
     EvalOptions options = args->options;
@@ -59,6 +64,17 @@ void RegisterEvalCommand(CLI::App* app) {
     const EvalSummary summary = Evaluate(options);
     std::cout << summary.markdown << "\n" << summary.BriefReport() << "\nwrote " << options.output_folder
               << std::endl;
+    if (args->pictures) {
+      for (const auto& [name, folder] : options.results) {
+        FitVisualsOptions visuals;
+        visuals.output_dir = folder;
+        visuals.html = false;
+        visuals.only_error_surfaces = true;
+        visuals.pictures_folder = options.output_folder + "/error_surfaces/" + name;
+        visuals.load.error_tau = options.headline_tau;
+        std::cout << name << ": " << WriteFitVisuals(visuals).BriefReport() << std::endl;
+      }
+    }
   });
 }
 

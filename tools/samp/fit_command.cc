@@ -6,6 +6,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/pipeline/run_fit.h"
+#include "libsamp/viz/fit_pictures.h"
 #include "tools/samp/commands.h"
 
 #ifndef SAMP_DEFAULT_MODEL
@@ -16,6 +17,8 @@ namespace samp::tools {
 
 void RegisterFitCommand(CLI::App* app) {
   auto options = std::make_shared<RunFitOptions>();
+  auto visuals = std::make_shared<FitVisualsOptions>();
+  visuals->pictures = visuals->html = false;
   RunFitOptions& o = *options;
   o.model_path = SAMP_DEFAULT_MODEL;
   CLI::App* command = app->add_subcommand(
@@ -79,11 +82,16 @@ void RegisterFitCommand(CLI::App* app) {
       ->check(CLI::PositiveNumber);
   command->add_flag_callback("--no-meshes", [options] { options->write_meshes = false; },
                     "Do not write meshes/ (PLY surfaces and aligned points)");
+  command->add_flag("--pictures", visuals->pictures,
+                    "After the fit, draw PNG pictures per track and sequence into OUT/pictures/ "
+                    "(mesh in the image, bird's-eye before/after, shape strip; docs/fitting.md)");
+  command->add_flag("--html", visuals->html,
+                    "After the fit, write the interactive viewer OUT/index.html (same as `samp view OUT`)");
   command->add_option("--threads", o.num_threads, "Worker threads for sequences and tracks")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   AddCommonOptions(command);
-  command->callback([options] {
+  command->callback([options, visuals] {
     SAMP_CHECK(!options->model_path.empty())
         << "no --model given and this build has no default model";
     const RunFitSummary summary = RunFit(*options);
@@ -97,6 +105,10 @@ void RegisterFitCommand(CLI::App* app) {
     if (summary.num_tracks_fitted == 0 && num_detections > 0) {
       SAMP_THROW() << "no track was fitted although the input had " << num_detections
                    << " detection(s) (see the messages above)";
+    }
+    if (visuals->pictures || visuals->html) {
+      visuals->output_dir = options->output_dir;
+      std::cout << WriteFitVisuals(*visuals).BriefReport() << std::endl;
     }
   });
 }

@@ -5,6 +5,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/model/shape_model.h"
+#include "libsamp/viz/html_viewer.h"
 #include "libsamp/viz/inspect.h"
 #include "tools/samp/commands.h"
 
@@ -20,6 +21,7 @@ void RegisterInspectCommand(CLI::App* app) {
     PictureOptions pictures;
     std::string pictures_folder;
     std::string manifest_path;
+    std::string html_path;
   };
   auto args = std::make_shared<Args>();
   CLI::App* command = app->add_subcommand(
@@ -84,6 +86,9 @@ void RegisterInspectCommand(CLI::App* app) {
                       "Columns of the eigen-shape picture, multiples of sigma, comma-separated")
       ->delimiter(',')
       ->capture_default_str();
+  command->add_option("--html", args->html_path,
+                      "Write an interactive page (one self-contained HTML file) with a slider per "
+                      "eigen-shape; the surface is extracted in the browser");
   AddCommonOptions(command);
   command->callback([args] {
     const ShapeModel model = ShapeModel::Load(args->model_path);
@@ -108,6 +113,13 @@ void RegisterInspectCommand(CLI::App* app) {
       options.manifest_path = args->manifest_path;
       options.max_components = args->meshes.max_components;
       std::cout << "\n" << WritePictures(model, options).BriefReport();
+    }
+    if (!args->html_path.empty()) {
+      InspectHtmlOptions options;
+      options.model_path = args->model_path;
+      options.max_components = args->meshes.max_components;
+      WriteInspectViewer(args->html_path, model, options);
+      std::cout << "\nwrote " << args->html_path << "\n";
     }
   });
 }

@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   samp::tools::RegisterFitCommand(&app);
   samp::tools::RegisterSynthCommand(&app);
   samp::tools::RegisterEvalCommand(&app);
+  samp::tools::RegisterViewCommand(&app);
 
   try {
     app.parse(argc, argv);
