@@ -216,9 +216,9 @@ TEST_F(HtmlViewerTest, FitPageWorksInHeadlessChromium) {
   const double load_ms = result["load_ms"].get<double>();
   const size_t bytes = fs::file_size(page);
   std::cout << "fit viewer: " << fixture_->tracks.size() << " tracks x 21 frames x 3000 points, page "
-            << bytes / 1e6 << " MB, scene ready after " << load_ms << " ms (navigation start to first render)"
-            << std::endl;
-  std::ofstream(out / "fit_viewer_load.json") << nlohmann::json{{"load_ms", load_ms}, {"page_bytes", bytes}}.dump();
+            << bytes / 1e6 << " MB, scene ready after " << load_ms << " ms (navigation start to first render; "
+            << "marks " << result["marks"].dump() << ")" << std::endl;
+  std::ofstream(out / "fit_viewer_load.json") << nlohmann::json{{"load_ms", load_ms}, {"marks", result["marks"]}, {"page_bytes", bytes}}.dump();
   Screenshot(chromium, "file://" + page + "#frame=10", (out / "fit_viewer.png").string(), profile);
 }
 

@@ -5,7 +5,9 @@
 (function () {
   'use strict';
   var C = window.sampCommon;
+  var marks = { script_start_ms: performance.now() };  // after the page and three.js are parsed
   var data = JSON.parse(document.getElementById('samp-data').textContent);
+  marks.json_parsed_ms = performance.now();
   var BACKGROUND = [244, 245, 247];
   var ERROR_ABOVE = new THREE.Color(200 / 255, 30 / 255, 30 / 255);
 
@@ -183,6 +185,7 @@
     return seq;
   });
   if (sequences.length < 2) sequenceSelect.style.display = 'none';
+  marks.scene_built_ms = performance.now();
 
   // ---- State ----------------------------------------------------------------------------------
   var current = null, frame = 0, playing = null, selected = null;
@@ -405,7 +408,7 @@
   if (frameMatch && current) setFrame(Number(frameMatch[1]));
   if (/errors/.test(hash) && current && current.hasErrors) { errorBox.checked = true; updateColors(current); render(); }
   if (/selftest/.test(hash)) {
-    var result = { kind: 'fit', load_ms: loadMs, three_revision: THREE.REVISION, sequences: sequences.length };
+    var result = { kind: 'fit', load_ms: loadMs, marks: marks, three_revision: THREE.REVISION, sequences: sequences.length };
     if (current) {
       setFrame(0);
       result.frame0 = window.sampViewer.counts();
