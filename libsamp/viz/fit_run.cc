@@ -12,6 +12,7 @@
 #include "libsamp/core/ply_io.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/sequence.h"
+#include "libsamp/data/sequence_layout.h"
 #include "libsamp/model/shape_model.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/viz/image.h"
@@ -64,12 +65,6 @@ Eigen::Vector3d Get3(const Json& j, const char* key, const std::string& where) {
 
 Eigen::Isometry3d CameraFromLabel(const ObjectLabel& label) { return PoseFromYaw(label.position, label.rotation_y); }
 
-std::string FrameFileName(const std::string& name, int frame, const std::string& extension) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "_%02d", frame);
-  return name + buffer + extension;
-}
-
 // Per-vertex distances of `mesh` (moved by `transform`) to the nearest of `points`.
 std::vector<float> VertexDistances(const Mesh& mesh, const Eigen::Isometry3d& transform,
                                    const std::vector<Eigen::Vector3f>& points) {
@@ -81,8 +76,8 @@ std::vector<float> VertexDistances(const Mesh& mesh, const Eigen::Isometry3d& tr
 
 void AttachGroundTruth(const std::string& directory, const std::string& name, const LoadFitRunOptions& options,
                        SequenceView* sequence) {
-  const fs::path gt = fs::path(directory) / "gt";
-  const fs::path labels_path = gt / "label_02" / (name + ".txt");
+  const SequenceLayout layout(directory, name);
+  const fs::path labels_path = layout.GroundTruthLabels();
   if (!fs::exists(labels_path)) return;
   std::map<int, GroundTruthCarView> cars;
   for (const ObjectLabel& label : ReadTrackingLabels(labels_path.string())) {
@@ -96,7 +91,7 @@ void AttachGroundTruth(const std::string& directory, const std::string& name, co
     car.world_from_object[label.frame] = world_from_camera * CameraFromLabel(label);
   }
   for (auto& [id, car] : cars) {
-    const fs::path mesh_path = gt / "meshes" / ("track_" + std::to_string(id) + ".ply");
+    const fs::path mesh_path = layout.GroundTruthMesh(id);
     if (fs::exists(mesh_path)) car.mesh = LoadMesh(mesh_path.string());
     sequence->ground_truth.push_back(std::move(car));
   }
@@ -343,7 +338,8 @@ FitRunView LoadFitRun(const std::string& output_dir, const LoadFitRunOptions& op
       const Eigen::Isometry3d& wfc = sequence.world_from_camera.at(f.frame);
       const Eigen::Vector3d n = wfc.linear() * p.head<3>();
       sequence.ground_plane_in_world << n, p[3] - n.dot(wfc.translation());
-      sequence.ground_plane_source = "planes/" + FrameFileName(sequence.name, f.frame, ".txt");
+      sequence.ground_plane_source = std::string(SequenceLayout::kPlanesFolder) + "/" +
+                                     SequenceLayout::FrameFileName(sequence.name, f.frame, ".txt");
       break;
     }
     if (sequence.ground_plane_source.empty()) {

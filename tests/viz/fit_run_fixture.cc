@@ -10,6 +10,7 @@
 #include "libsamp/core/mesh.h"
 #include "libsamp/core/ply_io.h"
 #include "libsamp/data/kitti_io.h"
+#include "libsamp/data/sequence_layout.h"
 #include "libsamp/viz/fit_run.h"
 #include "libsamp/viz/image.h"
 #include "libsamp/viz/inspect.h"
@@ -21,9 +22,7 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string Frame(const std::string& name, int frame, const std::string& extension) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof(buffer), "_%02d", frame);
-  return name + buffer + extension;
+  return SequenceLayout::FrameFileName(name, frame, extension);
 }
 
 // KITTI label of a box car (bottom centre at the object origin) seen from `camera_from_object`.

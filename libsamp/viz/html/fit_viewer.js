@@ -273,7 +273,7 @@
     var centre = lo.clone().add(hi).multiplyScalar(0.5);
     var span = Math.max(10, hi.x - lo.x, hi.z - lo.z);
     // From behind and above the first camera, looking at the scene's centre.
-    var eye = new THREE.Vector3(centre.x, centre.y - 0.55 * span, lo.z - 0.45 * span);
+    var eye = new THREE.Vector3(centre.x, centre.y - 0.4 * span, lo.z - 0.2 * span);
     controls.target.copy(toScene(centre));
     camera.position.copy(toScene(eye));
     controls.update();
@@ -299,7 +299,7 @@
     var points = t.num_points.reduce(function (a, b) { return a + b; }, 0);
     var speed = t.speed.reduce(function (a, b) { return a + b; }, 0) / Math.max(1, t.speed.length);
     var models = {};
-    t.motion_model.forEach(function (m) { models[m] = (models[m] || 0) + 1; });
+    t.motion_model.forEach(function (m) { if (m !== 'none') models[m] = (models[m] || 0) + 1; });
     var size = t.box_min ? [t.box_max[0] - t.box_min[0], t.box_max[1] - t.box_min[1], t.box_max[2] - t.box_min[2]] : null;
     return { points: points, speed: speed,
              models: Object.keys(models).map(function (m) { return m + ' ' + models[m]; }).join(', '),

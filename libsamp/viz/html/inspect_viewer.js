@@ -121,6 +121,13 @@
   var loadMs = performance.now();
 
   window.sampViewer = { scene: scene, render: render, numTriangles: function () { return numTriangles; } };
+  // #z=2,0,-1 opens with that code (in sigmas).
+  var zMatch = /z=([-0-9.,]+)/.exec(window.location.hash);
+  if (zMatch) {
+    zMatch[1].split(',').forEach(function (v, i) {
+      if (i < sliders.length && v !== '') { sliders[i].value = Number(v); sliders[i].dispatchEvent(new Event('input')); }
+    });
+  }
   if (/selftest/.test(window.location.hash)) {
     var result = { kind: 'inspect', load_ms: loadMs, three_revision: THREE.REVISION, components: sigmas.length };
     result.mean_triangles = numTriangles;
