@@ -9,8 +9,7 @@
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/mesh.h"
 #include "libsamp/core/ply_io.h"
-#include "libsamp/data/kitti_io.h"
-#include "libsamp/data/sequence_layout.h"
+#include "libsamp/core/camera.h"
 #include "libsamp/viz/fit_run.h"
 #include "libsamp/viz/image.h"
 #include "libsamp/viz/inspect.h"
@@ -22,7 +21,37 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string Frame(const std::string& name, int frame, const std::string& extension) {
-  return SequenceLayout::FrameFileName(name, frame, extension);
+  char buffer[32];
+  std::snprintf(buffer, sizeof(buffer), "_%02d", frame);
+  return name + buffer + extension;
+}
+
+// A KITTI label (docs/sequence_format.md): camera frame of its frame.
+struct ObjectLabel {
+  int frame = -1, track_id = -1;
+  double alpha = 0, height = 0, width = 0, length = 0, rotation_y = 0;
+  Eigen::Vector4d box_2d = Eigen::Vector4d::Zero();
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+};
+
+std::string Line(const ObjectLabel& l) {
+  char buffer[512];
+  std::snprintf(buffer, sizeof(buffer), "Car 0 0 %.4f %.2f %.2f %.2f %.2f %.4f %.4f %.4f %.4f %.4f %.4f %.4f 1",
+                l.alpha, l.box_2d[0], l.box_2d[1], l.box_2d[2], l.box_2d[3], l.height, l.width, l.length,
+                l.position.x(), l.position.y(), l.position.z(), l.rotation_y);
+  return buffer;
+}
+
+void WriteLabels(const std::string& path, const std::vector<ObjectLabel>& labels) {
+  std::string text;
+  for (const ObjectLabel& l : labels) text += Line(l) + "\n";
+  WriteTextFileAtomically(path, text);
+}
+
+void WriteTrackingLabels(const std::string& path, const std::vector<ObjectLabel>& labels) {
+  std::string text;
+  for (const ObjectLabel& l : labels) text += std::to_string(l.frame) + " " + std::to_string(l.track_id) + " " + Line(l) + "\n";
+  WriteTextFileAtomically(path, text);
 }
 
 // KITTI label of a box car (bottom centre at the object origin) seen from `camera_from_object`.
@@ -59,14 +88,18 @@ FitRunFixture WriteFitRunFixture(const std::string& root, const FixtureOptions& 
   std::mt19937 rng(options.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
 
-  StereoCalibration calibration;
-  calibration.camera.width = options.image_width;
-  calibration.camera.height = options.image_height;
-  calibration.camera.cx = options.image_width / 2.0;
-  calibration.camera.cy = options.image_height * 0.46;
-  calibration.baseline = 0.54;
-  WriteCalibration((seq / "calib" / (name + ".txt")).string(), calibration);
-  const PinholeCamera& camera = calibration.camera;
+  PinholeCamera camera;
+  camera.width = options.image_width;
+  camera.height = options.image_height;
+  camera.cx = options.image_width / 2.0;
+  camera.cy = options.image_height * 0.46;
+  {
+    char p2[256], p3[256];
+    std::snprintf(p2, sizeof(p2), "P2: %.6f 0 %.6f 0 0 %.6f %.6f 0 0 0 1 0\n", camera.fx, camera.cx, camera.fy, camera.cy);
+    std::snprintf(p3, sizeof(p3), "P3: %.6f 0 %.6f %.6f 0 %.6f %.6f 0 0 0 1 0\n", camera.fx, camera.cx, -0.54 * camera.fx,
+                  camera.fy, camera.cy);
+    WriteTextFileAtomically((seq / "calib" / (name + ".txt")).string(), std::string(p2) + p3);
+  }
   // The ego car drives 0.3 m per frame along z.
   std::vector<Eigen::Isometry3d> ego;
   for (int k = 0; k < options.num_frames; ++k) {
@@ -74,7 +107,14 @@ FitRunFixture WriteFitRunFixture(const std::string& root, const FixtureOptions& 
     pose.translation() = Eigen::Vector3d(0, 0, 0.3 * k);
     ego.push_back(pose);
   }
-  WritePoses((seq / "poses" / (name + ".txt")).string(), ego);
+  {
+    std::string text;
+    for (const Eigen::Isometry3d& pose : ego) {
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) text += std::to_string(pose.matrix()(r, c)) + (r == 2 && c == 3 ? "\n" : " ");
+    }
+    WriteTextFileAtomically((seq / "poses" / (name + ".txt")).string(), text);
+  }
   // Images: a sky and a road.
   RgbImage image(options.image_width, options.image_height, Rgb{200, 215, 235});
   DrawRectangle(&image, 0, int(camera.cy), options.image_width - 1, options.image_height - 1, Rgb{110, 110, 115});
