@@ -1,30 +1,37 @@
 #!/usr/bin/env bash
-# Leave-out benchmark of samp (issue 4; docs/results.md, docs/synthetic.md, docs/evaluation.md):
+# Leave-out benchmark of samp (issues 4 and 11; docs/results.md, docs/synthetic.md, docs/evaluation.md):
 #   1. train a shape model WITHOUT the evaluation cars (the hold-out of docs/cad_cars.md is
-#      marked "skip" in a copy of models/cad_manifest.json),
-#   2. synthesize a fixed, seeded set of stereo sequences from the held-out cars only
-#      (StereoSGBM disparity, standing/straight/turning, near/far),
+#      marked "skip" in a copy of models/cad_manifest.json; the road cars are never trained on),
+#   2. per seed, synthesize a fixed set of stereo sequences of the test cars only (the realistic
+#      street preset by default: StereoSGBM disparity, parked rows, traffic, clutter, a stereo
+#      detector's errors; docs/synthetic.md),
 #   3. fit every sequence with the full method (joint SAMP, the paper's data term), the full
 #      method with the ray-distance data term (--ray-depth-inside) and --single-frame,
-#   4. evaluate both against the ground truth with the raw-stereo and input-detection baselines.
+#   4. evaluate against the ground truth with the raw-stereo and input-detection baselines.
 #
 # Usage: tools/run_benchmark.sh [options]
 #   --samp PATH           samp executable (default: build/tools/samp/samp under the repository)
 #   --cad DIR             CAD cars folder (default: fetched by tools/get_cad_cars.sh into
 #                         $SAMP_DATA_DIR/cad, or ~/.cache/samp/cad)
+#   --road-cars DIR       folder of the four road cars (hatchback, SUV, pickup, Prius; canonicalised
+#                         by models/road_cars_manifest.json), added to the test cars (default:
+#                         $SAMP_SHARED_DIR/cad when that folder exists; "none" = without them)
 #   --work DIR            working folder (default: $SAMP_DATA_DIR/benchmark, or ~/.cache/samp/benchmark)
-#   --holdout "A B ..."   evaluation cars (default: acura-nsx-sz car5-trb1 p406 fox)
-#   --sequences N         synthetic sequences (default 12)
-#   --cars-per-sequence K cars per sequence (default 3; N x K >= 30 tracks)
-#   --seed S              synthesis seed (default 2017)
+#   --holdout "A B ..."   Debian evaluation cars (default: acura-nsx-sz car5-trb1 p406 fox)
+#   --preset P            synth preset: street (default) or clean
+#   --sequences N         synthetic sequences per seed (default 24)
+#   --cars-per-sequence K traffic cars per sequence (default 3)
+#   --parked-cars P       parked cars per sequence (street preset; default 3)
+#   --seeds "S1 S2 ..."   synthesis seeds (default "2017 7 11"; the first one's tables are shown in full)
+#   --clean-comparison    also run the clean preset on the first seed (the comparison table)
 #   --threads T           worker threads (default 2)
 #   --docs                also write docs/results.md and docs/images/benchmark_*.png
 #   --retrain             train the model even when WORK/model_holdout.vdb is up to date
 #   -h, --help            this text
 #
 # Every step logs its command and duration to WORK/benchmark.log. Outputs:
-#   WORK/model_holdout.vdb, WORK/sequences/<seq>/, WORK/fit_full/, WORK/fit_full_ray/,
-#   WORK/fit_single/, WORK/eval/.
+#   WORK/model_holdout.vdb and per run (seed_<S>, clean_<S>) WORK/<run>/sequences/<seq>/,
+#   fit_full/, fit_full_ray/, fit_single/, eval/.
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -32,9 +39,13 @@ samp="$root/build/tools/samp/samp"
 cad=""
 work=""
 holdout="acura-nsx-sz car5-trb1 p406 fox"
-sequences=12
+road_cars=""
+preset=street
+sequences=24
 cars_per_sequence=3
-seed=2017
+parked_cars=3
+seeds="2017 7 11"
+clean_comparison=0
 threads=2
 write_docs=0
 retrain=0
@@ -48,9 +59,13 @@ while [ $# -gt 0 ]; do
     --cad) cad="$2"; shift 2 ;;
     --work) work="$2"; shift 2 ;;
     --holdout) holdout="$2"; shift 2 ;;
+    --road-cars) road_cars="$2"; shift 2 ;;
+    --preset) preset="$2"; shift 2 ;;
     --sequences) sequences="$2"; shift 2 ;;
     --cars-per-sequence) cars_per_sequence="$2"; shift 2 ;;
-    --seed) seed="$2"; shift 2 ;;
+    --parked-cars) parked_cars="$2"; shift 2 ;;
+    --seeds) seeds="$2"; shift 2 ;;
+    --clean-comparison) clean_comparison=1; shift ;;
     --threads) threads="$2"; shift 2 ;;
     --docs) write_docs=1; shift ;;
     --retrain) retrain=1; shift ;;
@@ -91,15 +106,57 @@ fi
 manifest="$root/models/cad_manifest.json"
 [ -f "$manifest" ] || die "manifest '$manifest' not found"
 
-# 1. Training manifest without the hold-out cars, and the model.
-train_manifest="$work/train_manifest.json"
-python3 - "$manifest" "$train_manifest.new" $holdout <<'EOF'
+# 1. Test cars: the Debian hold-out, plus the road cars when given (a combined CAD folder of
+#    symbolic links and a combined manifest, so that one `samp synth` draws from all of them).
+if [ -z "$road_cars" ] && [ -n "${SAMP_SHARED_DIR:-}" ] && [ -d "$SAMP_SHARED_DIR/cad" ]; then
+  road_cars="$SAMP_SHARED_DIR/cad"
+fi
+[ "$road_cars" = none ] && road_cars=""
+test_cars="$holdout"
+synth_cad="$cad"
+synth_manifest="$manifest"
+if [ -n "$road_cars" ]; then
+  [ -d "$road_cars" ] || die "road cars folder '$road_cars' not found"
+  rm -rf "$work/cad_test"
+  mkdir -p "$work/cad_test"
+  for entry in "$cad"/*; do
+    [ -d "$entry" ] && ln -s "$(cd "$entry" && pwd)" "$work/cad_test/$(basename "$entry")"
+  done
+  ln -s "$(cd "$road_cars" && pwd)" "$work/cad_test/road"
+  synth_cad="$work/cad_test"
+  synth_manifest="$work/test_manifest.json"
+  road_names=$(python3 - "$manifest" "$root/models/road_cars_manifest.json" "$synth_manifest" <<'EOF'
 import json, sys
-source, target, holdout = sys.argv[1], sys.argv[2], set(sys.argv[3:])
+base, road, target = sys.argv[1:]
+m = json.load(open(base))
+known = {e.get("name") for e in m["models"]}
+names = []
+for entry in json.load(open(road))["models"]:
+    entry = dict(entry)
+    entry["file"] = "road/" + entry["file"]
+    if entry["name"] not in known:  # models/cad_manifest.json may list them already
+        m["models"].append(entry)
+    if not entry.get("skip"):
+        names.append(entry["name"])
+json.dump(m, open(target, "w"), indent=2)
+print(" ".join(names))
+EOF
+)
+  test_cars="$holdout $road_names"
+fi
+echo "run_benchmark: test cars: $test_cars" | tee -a "$log"
+car_args=()
+for car in $test_cars; do car_args+=(--car "$car"); done
+
+# 2. Training manifest without the test cars, and the model.
+train_manifest="$work/train_manifest.json"
+python3 - "$manifest" "$train_manifest.new" "$holdout" $test_cars <<'EOF'
+import json, sys
+source, target, holdout, test = sys.argv[1], sys.argv[2], set(sys.argv[3].split()), set(sys.argv[4:])
 m = json.load(open(source))
 found = set()
 for entry in m["models"]:
-    if entry.get("name") in holdout:
+    if entry.get("name") in test:
         found.add(entry["name"])
         if not entry.get("skip"):
             entry["skip"] = True
@@ -119,121 +176,51 @@ else
   echo "run_benchmark: train: $model is up to date (--retrain to redo)" | tee -a "$log"
 fi
 
-# 2. Synthetic sequences of the held-out cars (the original manifest canonicalises them).
-car_args=()
-for car in $holdout; do car_args+=(--car "$car"); done
-rm -rf "$work/sequences"
-step "synth" "$samp" synth --cad "$cad" --manifest "$manifest" "${car_args[@]}" \
-  --sequences "$sequences" --cars-per-sequence "$cars_per_sequence" --seed "$seed" \
-  --disparity sgbm -o "$work/sequences" -q
-seq_args=()
-for s in "$work"/sequences/[0-9][0-9][0-9][0-9][0-9][0-9]; do seq_args+=(--seq "$s"); done
-
-# 3. Fits: full method (paper's data term; ray distance) and single-frame baseline.
-rm -rf "$work/fit_full" "$work/fit_full_ray" "$work/fit_single"
-step "fit_full" "$samp" fit --model "$model" "${seq_args[@]}" --out "$work/fit_full" --threads "$threads" -q
-step "fit_full_ray" "$samp" fit --model "$model" "${seq_args[@]}" --ray-depth-inside \
-  --out "$work/fit_full_ray" --threads "$threads" -q
-step "fit_single" "$samp" fit --model "$model" "${seq_args[@]}" --single-frame \
-  --out "$work/fit_single" --threads "$threads" -q
-
-# 4. Evaluation.
-rm -rf "$work/eval"
-step "eval" "$samp" eval "${seq_args[@]}" --result "full=$work/fit_full" \
-  --result "full-ray=$work/fit_full_ray" --result "single-frame=$work/fit_single" \
-  --out "$work/eval" --threads "$threads" --pictures -q
+# 3-4. Per seed (and the clean comparison): synth, the three fits, evaluation.
+run_one() {  # run_one NAME PRESET SEED
+  local name="$1" run_preset="$2" run_seed="$3"
+  local dir="$work/$name"
+  rm -rf "$dir"
+  mkdir -p "$dir"
+  local extra=()
+  [ "$run_preset" = street ] && extra=(--parked-cars "$parked_cars")
+  step "$name/synth" "$samp" synth --cad "$synth_cad" --manifest "$synth_manifest" "${car_args[@]}" \
+    --preset "$run_preset" --sequences "$sequences" --cars-per-sequence "$cars_per_sequence" "${extra[@]}" \
+    --seed "$run_seed" --disparity sgbm -o "$dir/sequences"
+  local seq_args=()
+  for s in "$dir"/sequences/[0-9][0-9][0-9][0-9][0-9][0-9]; do seq_args+=(--seq "$s"); done
+  step "$name/fit_full" "$samp" fit --model "$model" "${seq_args[@]}" --out "$dir/fit_full" --threads "$threads" -q
+  step "$name/fit_full_ray" "$samp" fit --model "$model" "${seq_args[@]}" --ray-depth-inside \
+    --out "$dir/fit_full_ray" --threads "$threads" -q
+  step "$name/fit_single" "$samp" fit --model "$model" "${seq_args[@]}" --single-frame \
+    --out "$dir/fit_single" --threads "$threads" -q
+  step "$name/eval" "$samp" eval "${seq_args[@]}" --result "full=$dir/fit_full" \
+    --result "full-ray=$dir/fit_full_ray" --result "single-frame=$dir/fit_single" \
+    --out "$dir/eval" --threads "$threads" --pictures -q
+}
+runs=()
+for s in $seeds; do
+  run_one "seed_$s" "$preset" "$s"
+  runs+=("seed_$s")
+done
+first_seed="${seeds%% *}"
+if [ "$clean_comparison" = 1 ] && [ "$preset" != clean ]; then
+  run_one "clean_$first_seed" clean "$first_seed"
+  runs+=("clean_$first_seed")
+fi
 total=$(( $(date +%s) - total_start ))
 echo "run_benchmark: total $total s" | tee -a "$log"
-cat "$work/eval/results.md"
+cat "$work/seed_$first_seed/eval/results.md"
 
 # 5. docs/results.md (generated part; text below the "<!-- notes -->" line is kept).
 if [ "$write_docs" = 1 ]; then
   mkdir -p "$root/docs/images"
   for plot in f1_vs_tau accuracy_vs_tau completeness_vs_tau translation_vs_distance yaw_vs_distance; do
-    cp "$work/eval/$plot.png" "$root/docs/images/benchmark_$plot.png"
+    cp "$work/seed_$first_seed/eval/$plot.png" "$root/docs/images/benchmark_$plot.png"
   done
-  python3 - "$root/docs/results.md" "$work" "$holdout" "$sequences" "$cars_per_sequence" "$seed" \
-      "$threads" "$total" "$(nproc)" <<'EOF'
-import json, os, sys
-path, work, holdout, sequences, cars, seed, threads, total, cores = sys.argv[1:]
-r = json.load(open(os.path.join(work, "eval", "results.json")))
-taus = r["options"]["taus"]
-head = taus.index(r["options"]["headline_tau"])
-shape = {s["method"]: s for s in r["shape"]}
-pose = {p["method"]: {w["window"]: w for w in p["windows"]} for p in r["pose"]}
-timings = dict(line.split() for line in open(os.path.join(work, "timings.txt")))
-synth = json.load(open(os.path.join(work, "sequences", "config.json")))
-notes = ""
-if os.path.exists(path):
-    text = open(path).read()
-    if "<!-- notes -->" in text:
-        notes = text[text.index("<!-- notes -->"):]
-if not notes:
-    notes = "<!-- notes -->\n"
-
-def f1(m):
-    return 100 * shape[m]["f1"][head] if m in shape else float("nan")
-
-def check(ok):
-    return "**met**" if ok else "**not met**"
-
-windows = list(pose.get("full", {}).keys())
-near = windows[0] if windows else None
-far = next((w for w in windows if w.startswith(">=")), None)
-rows = []
-for m in ("full", "full-ray"):
-    if m not in shape:
-        continue
-    if "stereo" in shape:
-        d = f1(m) - f1("stereo")
-        rows.append((m, "F1@0.2 ≥ stereo + 5 points", f"{f1(m):.2f} vs {f1('stereo'):.2f} ({d:+.2f})", check(d >= 5)))
-    if "single-frame" in shape:
-        d = f1(m) - f1("single-frame")
-        rows.append((m, "F1@0.2 ≥ single-frame + 2.5 points", f"{f1(m):.2f} vs {f1('single-frame'):.2f} ({d:+.2f})", check(d >= 2.5)))
-    if near and m in pose:
-        w = pose[m][near]
-        rows.append((m, f"median yaw error ≤ 3° ({near})", f"{w['yaw_median_deg']:.2f}° (n = {w['count']})", check(w["count"] > 0 and w["yaw_median_deg"] <= 3)))
-        rows.append((m, f"median translation error ≤ 0.3 m ({near})", f"{w['translation_median']:.3f} m", check(w["count"] > 0 and w["translation_median"] <= 0.3)))
-    if far and m in pose and "detections" in pose:
-        a, b = pose[m][far], pose["detections"][far]
-        rows.append((m, f"mean translation error ≤ ½ detections' ({far})", f"{a['translation_mean']:.3f} vs {b['translation_mean']:.3f} m (n = {a['count']})", check(a["count"] > 0 and a["translation_mean"] <= 0.5 * b["translation_mean"])))
-        rows.append((m, f"median translation error ≤ ½ detections' ({far})", f"{a['translation_median']:.3f} vs {b['translation_median']:.3f} m", check(a["count"] > 0 and a["translation_median"] <= 0.5 * b["translation_median"])))
-
-table = open(os.path.join(work, "eval", "results.md")).read()
-out = []
-out.append("# Results: leave-out benchmark on synthetic KITTI-like stereo\n")
-out.append("Generated by `tools/run_benchmark.sh --docs` (the part above the notes; rerunning replaces it).\n")
-out.append("## Setup\n")
-out.append(f"- Model trained on the CAD cars of `models/cad_manifest.json` **without** the evaluation cars "
-           f"({', '.join(holdout.split())}; docs/cad_cars.md), default trainer options.")
-out.append(f"- {sequences} synthetic sequences × {cars} cars of the held-out cars only, seed {seed}, "
-           f"{synth['num_frames']} frames at {synth['frame_rate_hz']:g} Hz, {synth['width']}×{synth['height']} px, "
-           f"disparity {synth['disparity']} (docs/synthetic.md); cars {synth['min_distance']:g}–{synth['max_distance']:g} m, "
-           "standing / straight / turning in equal shares, near (< 20 m) and far alternating.")
-out.append("- Methods: **stereo** = the input disparity inside the car's segment (shape only); "
-           "**detections** = the noisy input detections (pose only); **single-frame** = `samp fit --single-frame` "
-           "(GCPR 2016 style); **full** = `samp fit` (joint shape and motion priors, the paper's data term); "
-           "**full-ray** = `samp fit --ray-depth-inside` (the same with the data term measured along the viewing ray, "
-           "docs/fitting.md). Metrics: docs/evaluation.md.")
-out.append(f"- Run on {cores} cores with {threads} threads; total {total} s "
-           f"({', '.join(f'{k} {v} s' for k, v in timings.items())}).\n")
-out.append("Command:\n")
-out.append(f"```sh\ntools/run_benchmark.sh --cad CACHE_DIR/cars --sequences {sequences} --cars-per-sequence {cars} --seed {seed} --threads {threads} --docs\n```\n")
-out.append("## Targets (issue 4)\n")
-out.append("| method | target | measured | |\n|---|---|---|---|")
-for method, name, value, verdict in rows:
-    out.append(f"| {method} | {name} | {value} | {verdict} |")
-out.append("\nThe paper's Table 1 (KITTI, libELAS input) for comparison: stereo 71.65 %, single-frame 74.38 %, "
-           "SAMP 77.11 % F1 at τ = 0.2 m.\n")
-out.append("## Tables\n")
-out.append(table.replace("### ", "### "))
-out.append("## Plots\n")
-for name, title in [("f1_vs_tau", "F1 vs. τ"), ("accuracy_vs_tau", "Accuracy vs. τ"),
-                    ("completeness_vs_tau", "Completeness vs. τ"),
-                    ("translation_vs_distance", "Median translation error by distance"),
-                    ("yaw_vs_distance", "Median yaw error by distance")]:
-    out.append(f"![{title}](images/benchmark_{name}.png)\n")
-open(path, "w").write("\n".join(out) + "\n" + notes)
-EOF
+  python3 "$root/tools/benchmark_report.py" --results "$root/docs/results.md" --work "$work" \
+    --runs "${runs[*]}" --test-cars "$test_cars" --holdout "$holdout" --preset "$preset" \
+    --sequences "$sequences" --cars "$cars_per_sequence" --parked "$parked_cars" --threads "$threads" \
+    --total "$total" --cores "$(nproc)"
   echo "run_benchmark: wrote $root/docs/results.md and docs/images/benchmark_*.png"
 fi

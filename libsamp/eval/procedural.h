@@ -43,4 +43,22 @@ Eigen::Vector3d FacadeAlbedo(double along, double up, const Eigen::Vector3d& bas
 Eigen::Vector3d BlotchAlbedo(const Eigen::Vector3d& point_in_world, const Eigen::Vector3d& base,
                              double footprint, uint64_t seed);
 
+// Street scenes (street_scene.h).
+// Asphalt: grain, large-scale patches, darker repair patches and tar seams.
+// `mark` in [0, 1] blends in white paint (lane marks), computed by the caller.
+Eigen::Vector3d AsphaltAlbedo(const Eigen::Vector3d& point_in_world, double mark, double footprint,
+                              uint64_t seed);
+// Facade styles: brick, plaster, concrete panels, storefront (glass ground floor over plaster).
+enum class FacadeStyle { kBrick = 0, kPlaster = 1, kPanels = 2, kStorefront = 3 };
+constexpr int kNumFacadeStyles = 4;
+// `along`, `up` in-plane coordinates (metres), `window_seed` varies the window grid per building.
+Eigen::Vector3d StyledFacadeAlbedo(FacadeStyle style, double along, double up, const Eigen::Vector3d& base,
+                                   double footprint, uint64_t seed);
+// Paving slabs of `slab` metres with joints; grass/soil; foliage; generic fine-grain concrete.
+Eigen::Vector3d PavingAlbedo(const Eigen::Vector3d& p, double slab, double footprint, uint64_t seed);
+Eigen::Vector3d GrassAlbedo(const Eigen::Vector3d& p, double footprint, uint64_t seed);
+Eigen::Vector3d FoliageAlbedo(const Eigen::Vector3d& p, double footprint, uint64_t seed);
+Eigen::Vector3d ConcreteAlbedo(const Eigen::Vector3d& p, const Eigen::Vector3d& base, double footprint,
+                               uint64_t seed);
+
 }  // namespace samp::procedural

@@ -16,6 +16,8 @@
 #include <vector>
 
 #include "libsamp/core/mesh.h"
+#include "libsamp/eval/detector_model.h"
+#include "libsamp/eval/street_scene.h"
 
 namespace samp {
 
@@ -23,6 +25,9 @@ namespace samp {
 struct SynthCar {
   std::string name;
   Mesh mesh;
+  // Triangles [0, num_body_triangles) are the body, the rest wheels (shaded as
+  // tyres); -1 = all body.
+  int num_body_triangles = -1;
 };
 
 // Where the cars come from: CAD files canonicalised with a manifest (as the
@@ -52,6 +57,10 @@ enum class DisparitySource {
   kTrueWithNoise,  // true disparity + the noise model below (fast, for tests)
 };
 
+// Which scenes to make: the realistic street (the default, docs/synthetic.md
+// "Street") or the clean scenes of the first benchmark (`--preset clean`).
+enum class SynthScene { kStreet, kClean };
+
 struct SynthOptions {
   // Root folder; sequence i is written to <output_folder>/<seq>, seq = %06d of first_sequence + i.
   std::string output_folder;
@@ -59,8 +68,17 @@ struct SynthOptions {
   uint64_t seed = 1;
   int num_sequences = 1;
   int first_sequence = 0;
-  // Cars per sequence (each a different CAD car when enough are given).
+  // Scene kind; SynthOptions::Clean() gives every default of the clean preset.
+  SynthScene scene = SynthScene::kStreet;
+  // Street layout (kStreet only).
+  StreetOptions street;
+  // Traffic cars per sequence (each a different CAD car when enough are given).
   int cars_per_sequence = 3;
+  // Parked cars per sequence in the parking lanes' rows (kStreet only; standing).
+  int parked_cars_per_sequence = 3;
+  // Shares of the traffic cars that stand (waiting) and that turn; the rest drive
+  // straight (kStreet; kClean: car i is standing / straight / turning by i mod 3).
+  double standing_share = 0.2, turning_share = 0.25;
   // Frames per sequence and frame rate (KITTI stereo 2015 multiview: 21 frames, 10 Hz).
   int num_frames = 21;
   double frame_rate_hz = 10.0;
@@ -75,15 +93,29 @@ struct SynthOptions {
 
   // Distance of each car to the camera at the middle frame, metres (stratified near/far).
   double min_distance = 5.0, max_distance = 45.0;
-  // Motion mix: car i of the whole set is standing / straight / turning by i mod 3.
   // Straight speeds, m/s (urban: 11-47 km/h).
   double min_speed = 3.0, max_speed = 13.0;
   // Turning: speeds and absolute yaw rates (rad/s).
   double min_turn_speed = 2.5, max_turn_speed = 8.0;
   double min_yaw_rate = 0.15, max_yaw_rate = 0.5;
   // Ego car: forward speed range (m/s) and maximal absolute yaw rate (rad/s).
-  double min_ego_speed = 0.0, max_ego_speed = 8.0;
-  double max_ego_yaw_rate = 0.04;
+  double min_ego_speed = 0.0, max_ego_speed = 15.0;
+  double max_ego_yaw_rate = 0.02;
+  // Ego sway (kStreet): pitch and roll amplitudes (deg) and vertical bounce (m) at
+  // max_ego_speed (scaled by speed / max_ego_speed, at least 30 %), and the
+  // maximal constant pitch of the camera mounting (deg).
+  double ego_pitch_sway_deg = 0.6, ego_roll_sway_deg = 0.3, ego_bounce = 0.015;
+  double ego_max_pitch_offset_deg = 0.8;
+
+  // Lighting and paint (kStreet): sun elevation range (deg), paint clear coat
+  // (Blinn-Phong sun highlight strength and exponent, Schlick F0 of the sky
+  // reflection), glass F0, relative strength of the paint's texture (dirt,
+  // orange peel), and cast shadows.
+  double min_sun_elevation_deg = 20.0, max_sun_elevation_deg = 65.0;
+  double paint_specular = 0.6, paint_shininess = 80.0, paint_fresnel_f0 = 0.05;
+  double glass_fresnel_f0 = 0.08;
+  double paint_texture = 0.04;
+  bool shadows = true;
 
   // Image noise: Gaussian, std. dev. in 8-bit grey levels, independent per pixel and camera.
   double image_noise_sigma = 2.0;
@@ -96,24 +128,15 @@ struct SynthOptions {
   double invalid_fraction = 0.1;
   double outlier_fraction = 0.02;
 
-  // Detections (3DOP-like): std. dev. of the position along the viewing ray
-  // a + b d^2 and across it (horizontal) c + e d, d the distance in metres.
-  double det_depth_sigma_a = 0.1, det_depth_sigma_b = 0.001;
-  double det_lateral_sigma_a = 0.05, det_lateral_sigma_b = 0.005;
-  double det_height_sigma = 0.05;
-  // Yaw noise std. dev. (deg) f + g d, probability of a 180-degree flip, of a miss.
-  double det_yaw_sigma_deg_a = 3.0, det_yaw_sigma_deg_b = 0.15;
-  double det_flip_probability = 0.08;
-  double det_miss_probability = 0.05;
-  // Relative std. dev. of the box size h, w, l; std. dev. of the 2D box corners (px).
-  double det_size_sigma = 0.05;
-  double det_box_sigma_px = 2.0;
-  // Cars with fewer visible pixels than this are never detected.
-  int det_min_pixels = 150;
+  // The detector's errors (detector_model.h; defaults: a stereo 3D detector).
+  DetectorModelOptions detector;
 
   // Print progress.
   bool show_progress = true;
 
+  // The clean preset: today's first-benchmark scenes (plain paint, no street
+  // clutter, no sway, 3DOP-like white detection noise, no false positives).
+  static SynthOptions Clean();
   void Check() const;
   std::string ToJson() const;
 };
@@ -124,12 +147,20 @@ struct SynthSequenceInfo {
   int num_cars = 0;
   int num_detections = 0;  // over all frames
   int num_gt_labels = 0;   // car-frames with at least one visible pixel
+  int num_false_positives = 0;
+  // Disparity quality on the visible car pixels: mean absolute error (px) over
+  // the valid pixels, and the share of car pixels with a valid disparity.
+  double car_disparity_mae_px = 0.0;
+  double car_disparity_valid_fraction = 0.0;
+  int64_t car_pixels = 0;
 };
 
 struct SynthSummary {
   std::vector<SynthSequenceInfo> sequences;
   int num_tracks = 0;
   int num_standing = 0, num_straight = 0, num_turning = 0;
+  int num_parked = 0;  // among the standing
+  double car_disparity_mae_px = 0.0, car_disparity_valid_fraction = 0.0;  // over all sequences
   double seconds = 0.0;
   std::string BriefReport() const;
 };

@@ -88,4 +88,89 @@ std::vector<uint8_t> ShadeRender(const RenderBuffers& buffers,
   return rgb;
 }
 
+RenderBuffers RenderFromScene(const EmbreeScene& scene, const PinholeCamera& camera,
+                              const Eigen::Isometry3d& world_from_camera) {
+  SAMP_CHECK(camera.width > 0 && camera.height > 0 && camera.fx > 0 && camera.fy > 0)
+      << "RenderFromScene: invalid camera (" << camera.width << "x" << camera.height << ")";
+  RenderBuffers buffers;
+  buffers.width = camera.width;
+  buffers.height = camera.height;
+  const size_t num_pixels = size_t(camera.width) * camera.height;
+  buffers.depth.resize(num_pixels);
+  buffers.mesh_index.resize(num_pixels);
+  buffers.triangle.resize(num_pixels);
+  buffers.normal.resize(num_pixels);
+  constexpr int kBandRows = 8;
+  const int num_bands = (camera.height + kBandRows - 1) / kBandRows;
+  tbb::parallel_for(tbb::blocked_range<int>(0, num_bands), [&](const tbb::blocked_range<int>& range) {
+    for (int band = range.begin(); band != range.end(); ++band) {
+      const int row_begin = band * kBandRows;
+      const int row_end = std::min(camera.height, row_begin + kBandRows);
+      const size_t offset = size_t(row_begin) * camera.width;
+      EmbreeScene::ImageOutputs outputs;
+      outputs.depth = buffers.depth.data() + offset;
+      outputs.geometry = buffers.mesh_index.data() + offset;
+      outputs.triangle = buffers.triangle.data() + offset;
+      outputs.normal = buffers.normal.data() + offset;
+      scene.IntersectCameraImage(camera, world_from_camera, row_begin, row_end, outputs);
+    }
+  });
+  return buffers;
+}
+
+std::vector<uint8_t> LightVisibility(const EmbreeScene& scene, const std::vector<Eigen::Vector3f>& points,
+                                     const std::vector<Eigen::Vector3f>& normals,
+                                     const Eigen::Vector3f& to_light, float bias, float max_distance) {
+  SAMP_CHECK(points.size() == normals.size()) << "LightVisibility: " << points.size() << " points but "
+                                              << normals.size() << " normals";
+  std::vector<uint8_t> visible(points.size(), 0);
+  constexpr size_t kChunk = 4096;
+  const size_t num_chunks = (points.size() + kChunk - 1) / kChunk;
+  tbb::parallel_for(size_t(0), num_chunks, [&](size_t chunk) {
+    const size_t begin = chunk * kChunk, end = std::min(points.size(), begin + kChunk);
+    std::vector<Eigen::Vector3f> origins, directions;
+    std::vector<size_t> index;
+    origins.reserve(end - begin);
+    for (size_t i = begin; i < end; ++i) {
+      if (normals[i].squaredNorm() == 0.f) continue;
+      origins.push_back(points[i] + bias * (to_light + normals[i]));
+      directions.push_back(to_light);
+      index.push_back(i);
+    }
+    std::vector<RayHit> hits;
+    scene.Intersect(origins, directions, &hits, max_distance);
+    for (size_t k = 0; k < index.size(); ++k) visible[index[k]] = hits[k].Hit() ? 0 : 1;
+  });
+  return visible;
+}
+
+Eigen::Vector3d OutdoorLighting::Environment(const Eigen::Vector3d& direction) const {
+  const double up = -direction.y();  // y points down
+  if (up < 0.0) return ground;
+  const double t = std::pow(std::clamp(up, 0.0, 1.0), 0.5);
+  return (1.0 - t) * horizon + t * zenith;
+}
+
+Eigen::Vector3d ShadeSurface(const SurfaceMaterial& material, const Eigen::Vector3d& normal,
+                             const Eigen::Vector3d& to_viewer, const OutdoorLighting& lighting,
+                             double sun_visible, double occlusion) {
+  const double n_dot_v = std::clamp(normal.dot(to_viewer), 0.0, 1.0);
+  const double fresnel =
+      material.fresnel_f0 > 0.0 ? material.fresnel_f0 + (1.0 - material.fresnel_f0) * std::pow(1.0 - n_dot_v, 5.0)
+                                : 0.0;
+  const double n_dot_s = std::max(0.0, normal.dot(lighting.to_sun));
+  Eigen::Vector3d radiance = (1.0 - fresnel) * material.albedo.cwiseProduct(
+                                                    lighting.ambient * occlusion + lighting.sun * (sun_visible * n_dot_s));
+  if (material.specular > 0.0 && sun_visible > 0.0 && n_dot_s > 0.0) {
+    const Eigen::Vector3d half = (lighting.to_sun + to_viewer).normalized();
+    radiance += material.specular * sun_visible * std::pow(std::max(0.0, normal.dot(half)), material.shininess) *
+                lighting.sun;
+  }
+  if (fresnel > 0.0) {
+    const Eigen::Vector3d reflected = 2.0 * n_dot_v * normal - to_viewer;
+    radiance += fresnel * occlusion * lighting.Environment(reflected.normalized());
+  }
+  return radiance;
+}
+
 }  // namespace samp

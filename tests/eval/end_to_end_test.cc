@@ -60,10 +60,11 @@ ShapeModel BoxModel() {
 
 TEST(EndToEnd, SynthFitEval) {
   const std::string root = test::MakeTempFolder("e2e");
-  SynthOptions synth = test::QuickSynthOptions(root + "/seqs", 21);
+  // The clean preset: the chain is tested here, not the realistic scenes.
+  SynthOptions synth = test::QuickSynthOptions(root + "/seqs", 21, SynthScene::kClean);
   synth.num_sequences = 1;
   synth.num_frames = 6;
-  synth.det_flip_probability = 0.0;
+  synth.detector.flip_probability = 0.0;
   const SynthSummary sequences =
       SynthesizeSequences(synth, {{"boxcar", test::MakeBoxCar(4.2)}, {"boxcar_short", test::MakeBoxCar(3.9)}});
   const std::string model_path = root + "/box_model.vdb";

@@ -19,8 +19,9 @@ Mesh MakeBoxCar(double length) {
   return body;
 }
 
-SynthOptions QuickSynthOptions(const std::string& output_folder, uint64_t seed) {
-  SynthOptions o;
+SynthOptions QuickSynthOptions(const std::string& output_folder, uint64_t seed, SynthScene scene) {
+  SynthOptions o = scene == SynthScene::kClean ? SynthOptions::Clean() : SynthOptions();
+  o.parked_cars_per_sequence = 1;
   o.output_folder = output_folder;
   o.seed = seed;
   o.num_sequences = 2;

@@ -12,8 +12,10 @@ namespace samp::test {
 // x front, y down, z left), `scale` stretches the length.
 Mesh MakeBoxCar(double length = 4.2);
 
-// Small images (400 x 120, KITTI's field of view), few frames, true-disparity noise mode.
-SynthOptions QuickSynthOptions(const std::string& output_folder, uint64_t seed);
+// Small images (400 x 120, KITTI's field of view), few frames, true-disparity noise mode;
+// the scene preset as given (street = the default of `samp synth`, with one parked car).
+SynthOptions QuickSynthOptions(const std::string& output_folder, uint64_t seed,
+                               SynthScene scene = SynthScene::kStreet);
 
 // A fresh empty folder under the system temp directory.
 std::string MakeTempFolder(const std::string& name);
