@@ -13,11 +13,11 @@
 #   --samp PATH           samp executable (default: build/tools/samp/samp under the repository)
 #   --cad DIR             CAD cars folder (default: fetched by tools/get_cad_cars.sh into
 #                         $SAMP_DATA_DIR/cad, or ~/.cache/samp/cad)
-#   --road-cars DIR       folder of the four road cars (hatchback, SUV, pickup, Prius; canonicalised
-#                         by models/road_cars_manifest.json), added to the test cars (default:
-#                         $SAMP_SHARED_DIR/cad when that folder exists; "none" = without them)
+#   --no-road-cars        do not add the four road cars (hatchback, suv, pickup, prius: models/cad/,
+#                         CAD_FOLDER/road/) to the test cars (default: they are test cars)
 #   --work DIR            working folder (default: $SAMP_DATA_DIR/benchmark, or ~/.cache/samp/benchmark)
-#   --holdout "A B ..."   Debian evaluation cars (default: acura-nsx-sz car5-trb1 p406 fox)
+#   --holdout "A B ..."   Debian test cars (default: acura-nsx-sz car5-trb1, race-only bodies the
+#                         road-traffic manifest skips anyway)
 #   --preset P            synth preset: street (default) or clean
 #   --sequences N         synthetic sequences per seed (default 24)
 #   --cars-per-sequence K traffic cars per sequence (default 3)
@@ -38,8 +38,8 @@ root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 samp="$root/build/tools/samp/samp"
 cad=""
 work=""
-holdout="acura-nsx-sz car5-trb1 p406 fox"
-road_cars=""
+holdout="acura-nsx-sz car5-trb1"
+road_cars=1
 preset=street
 sequences=24
 cars_per_sequence=3
@@ -59,7 +59,7 @@ while [ $# -gt 0 ]; do
     --cad) cad="$2"; shift 2 ;;
     --work) work="$2"; shift 2 ;;
     --holdout) holdout="$2"; shift 2 ;;
-    --road-cars) road_cars="$2"; shift 2 ;;
+    --no-road-cars) road_cars=0; shift ;;
     --preset) preset="$2"; shift 2 ;;
     --sequences) sequences="$2"; shift 2 ;;
     --cars-per-sequence) cars_per_sequence="$2"; shift 2 ;;
@@ -106,44 +106,18 @@ fi
 manifest="$root/models/cad_manifest.json"
 [ -f "$manifest" ] || die "manifest '$manifest' not found"
 
-# 1. Test cars: the Debian hold-out, plus the road cars when given (a combined CAD folder of
-#    symbolic links and a combined manifest, so that one `samp synth` draws from all of them).
-if [ -z "$road_cars" ] && [ -n "${SAMP_SHARED_DIR:-}" ] && [ -d "$SAMP_SHARED_DIR/cad" ]; then
-  road_cars="$SAMP_SHARED_DIR/cad"
-fi
-[ "$road_cars" = none ] && road_cars=""
+# 1. Test cars, held out from the model: the four road cars (tools/get_cad_cars.sh copies the
+#    repository's models/cad/ to CAD_FOLDER/road/) and the race-only hold-out.
 test_cars="$holdout"
-synth_cad="$cad"
-synth_manifest="$manifest"
-if [ -n "$road_cars" ]; then
-  [ -d "$road_cars" ] || die "road cars folder '$road_cars' not found"
-  rm -rf "$work/cad_test"
-  mkdir -p "$work/cad_test"
-  for entry in "$cad"/*; do
-    [ -d "$entry" ] && ln -s "$(cd "$entry" && pwd)" "$work/cad_test/$(basename "$entry")"
-  done
-  ln -s "$(cd "$road_cars" && pwd)" "$work/cad_test/road"
-  synth_cad="$work/cad_test"
-  synth_manifest="$work/test_manifest.json"
-  road_names=$(python3 - "$manifest" "$root/models/road_cars_manifest.json" "$synth_manifest" <<'EOF'
+[ "$road_cars" = 1 ] && test_cars="$holdout hatchback suv pickup prius"
+# The test manifest: models/cad_manifest.json with AddWheels' tyres under bodies that have none.
+synth_manifest="$work/test_manifest.json"
+python3 - "$manifest" "$synth_manifest" <<'EOF'
 import json, sys
-base, road, target = sys.argv[1:]
-m = json.load(open(base))
-known = {e.get("name") for e in m["models"]}
-names = []
-for entry in json.load(open(road))["models"]:
-    entry = dict(entry)
-    entry["file"] = "road/" + entry["file"]
-    if entry["name"] not in known:  # models/cad_manifest.json may list them already
-        m["models"].append(entry)
-    if not entry.get("skip"):
-        names.append(entry["name"])
-json.dump(m, open(target, "w"), indent=2)
-print(" ".join(names))
+m = json.load(open(sys.argv[1]))
+m.setdefault("defaults", {}).setdefault("wheels", "synthesise")
+json.dump(m, open(sys.argv[2], "w"), indent=2)
 EOF
-)
-  test_cars="$holdout $road_names"
-fi
 echo "run_benchmark: test cars: $test_cars" | tee -a "$log"
 car_args=()
 for car in $test_cars; do car_args+=(--car "$car"); done
@@ -154,6 +128,7 @@ python3 - "$manifest" "$train_manifest.new" "$holdout" $test_cars <<'EOF'
 import json, sys
 source, target, holdout, test = sys.argv[1], sys.argv[2], set(sys.argv[3].split()), set(sys.argv[4:])
 m = json.load(open(source))
+m.setdefault("defaults", {}).setdefault("wheels", "synthesise")  # as the test cars (AddWheels)
 found = set()
 for entry in m["models"]:
     if entry.get("name") in test:
@@ -165,12 +140,18 @@ missing = holdout - found
 if missing:
     sys.exit("hold-out cars not in the manifest: " + ", ".join(sorted(missing)))
 json.dump(m, open(target, "w"), indent=2)
+# R = 5 components need >= 6 training cars; with fewer, R = cars - 1.
+used = sum(1 for entry in m["models"] if not entry.get("skip"))
+open(target + ".rank", "w").write(str(max(1, min(5, used - 1))))
 EOF
+rank=$(cat "$train_manifest.new.rank")
+rm -f "$train_manifest.new.rank"
+echo "run_benchmark: training cars of the manifest: R = $rank components" | tee -a "$log"
 model="$work/model_holdout.vdb"
 if [ "$retrain" = 1 ] || [ ! -f "$model" ] || ! cmp -s "$train_manifest.new" "$train_manifest"; then
   mv "$train_manifest.new" "$train_manifest"
   rm -f "$model"
-  step "train" "$samp" train "$cad" --manifest "$train_manifest" -o "$model" --threads "$threads" -q
+  step "train" "$samp" train "$cad" --manifest "$train_manifest" -R "$rank" -o "$model" --threads "$threads" -q
 else
   rm -f "$train_manifest.new"
   echo "run_benchmark: train: $model is up to date (--retrain to redo)" | tee -a "$log"
@@ -184,7 +165,7 @@ run_one() {  # run_one NAME PRESET SEED
   mkdir -p "$dir"
   local extra=()
   [ "$run_preset" = street ] && extra=(--parked-cars "$parked_cars")
-  step "$name/synth" "$samp" synth --cad "$synth_cad" --manifest "$synth_manifest" "${car_args[@]}" \
+  step "$name/synth" "$samp" synth --cad "$cad" --manifest "$synth_manifest" "${car_args[@]}" \
     --preset "$run_preset" --sequences "$sequences" --cars-per-sequence "$cars_per_sequence" "${extra[@]}" \
     --seed "$run_seed" --disparity sgbm -o "$dir/sequences"
   local seq_args=()

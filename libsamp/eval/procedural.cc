@@ -18,30 +18,20 @@ double DistanceToGrid(double x, double period) {
 
 }  // namespace
 
-uint64_t Mix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-uint64_t Mix(uint64_t a, uint64_t b) { return Mix(Mix(a) ^ (b + 0x632be59bd9b4e019ULL)); }
-
-double HashToUnit(int64_t x, int64_t y, int64_t z, uint64_t seed) {
-  const uint64_t h = Mix(Mix(Mix(seed, uint64_t(x)), uint64_t(y)), uint64_t(z));
-  return double(h >> 11) * (1.0 / 9007199254740992.0);
-}
-
 double ValueNoise(const Eigen::Vector3d& p, uint64_t seed) {
   const double fx = std::floor(p.x()), fy = std::floor(p.y()), fz = std::floor(p.z());
   const int64_t ix = int64_t(fx), iy = int64_t(fy), iz = int64_t(fz);
   const double tx = Smooth(p.x() - fx), ty = Smooth(p.y() - fy), tz = Smooth(p.z() - fz);
+  // HashToUnit(x, y, z, seed) of the 8 corners, sharing the (seed, x) and (seed, x, y) prefixes.
   double value = 0.0;
-  for (int dz = 0; dz < 2; ++dz) {
+  for (int dx = 0; dx < 2; ++dx) {
+    const uint64_t hx = Mix(seed, uint64_t(ix + dx));
     for (int dy = 0; dy < 2; ++dy) {
-      for (int dx = 0; dx < 2; ++dx) {
+      const uint64_t hxy = Mix(hx, uint64_t(iy + dy));
+      for (int dz = 0; dz < 2; ++dz) {
         const double w = (dx ? tx : 1.0 - tx) * (dy ? ty : 1.0 - ty) * (dz ? tz : 1.0 - tz);
-        value += w * HashToUnit(ix + dx, iy + dy, iz + dz, seed);
+        const uint64_t h = Mix(hxy, uint64_t(iz + dz));
+        value += w * (double(h >> 11) * (1.0 / 9007199254740992.0));
       }
     }
   }

@@ -1233,11 +1233,14 @@ std::vector<SynthCar> LoadSynthCars(const SynthCarSource& source) {
         continue;
       }
       const CanonicalizeOptions& canonicalize = entry ? entry->canonicalize : manifest.defaults;
-      const CanonicalizeResult result = Canonicalize(LoadMesh(file.string()), canonicalize);
+      const Mesh cad_mesh = LoadMesh(file.string());
+      const CanonicalizeResult result = Canonicalize(cad_mesh, canonicalize);
       for (const std::string& warning : result.warnings) {
         LogWarning() << "synth: " << relative << ": " << warning;
       }
-      cars.push_back({name, result.mesh});
+      // Canonicalize appends the synthesised tyres after the body's triangles.
+      cars.push_back({name, result.mesh, result.wheels_added ? int(cad_mesh.triangles.size()) : -1});
+      if (result.wheels_added) LogDebug() << "synth: " << name << ": " << result.wheels.BriefReport();
       found.insert(Lower(name));
       found.insert(Lower(file.stem().string()));
     }

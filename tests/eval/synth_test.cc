@@ -12,6 +12,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "libsamp/core/error.h"
+#include "libsamp/core/wheels.h"
+#include "libsamp/scan/mesh_io.h"
 #include "libsamp/eval/evaluation.h"
 #include "libsamp/eval/synth.h"
 #include "libsamp/data/kitti_io.h"
@@ -149,6 +151,63 @@ TEST(Synth, StreetSwayParkedCarsAndStereoQuality) {
   EXPECT_GT(summary.car_disparity_valid_fraction, 0.5);
   EXPECT_GT(summary.car_disparity_mae_px, 0.1);
   EXPECT_LT(summary.car_disparity_mae_px, 5.0);
+  fs::remove_all(root);
+}
+
+// A wheel-less body gets AddWheels' tyres (as Canonicalize does for the Debian
+// bodies): rendered in the street preset, the car's lowest visible points lie
+// on the road and the pixels below the body's ground clearance exist (tyres).
+TEST(Synth, RenderedCarHasWheelsOnTheRoad) {
+  Mesh body = MakeBoxMesh(Eigen::Vector3d(-2.1, -0.75, -0.85), Eigen::Vector3d(2.1, 0.0, 0.85));
+  body.Append(MakeBoxMesh(Eigen::Vector3d(-1.2, -1.35, -0.75), Eigen::Vector3d(0.9, -0.75, 0.75)));
+  const WheelOptions wheel_options;
+  const WheeledCar wheeled = AddWheels(body, wheel_options);
+  const SynthCar car{"wheeled_box", wheeled.Combined(), int(body.triangles.size())};
+  const std::string root = test::MakeTempFolder("synth_wheels");
+  SynthOptions options = test::QuickSynthOptions(root, 8);
+  options.width = 1242;  // full resolution: the tyres must cover pixels
+  options.height = 375;
+  options.focal_px = 721.5377;
+  options.cx_px = 609.5593;
+  options.cy_px = 172.854;
+  options.num_sequences = 1;
+  options.num_frames = 3;
+  options.max_distance = 15.0;
+  options.cars_per_sequence = 2;
+  options.parked_cars_per_sequence = 2;
+  const SynthSummary summary = SynthesizeSequences(options, {car});
+  ASSERT_EQ(summary.sequences.size(), 1u);
+  ASSERT_GE(summary.num_tracks, 1);
+  const std::string seq = summary.sequences[0].folder;
+  const Mesh written = LoadMesh(seq + "/gt/meshes/track_0.ply");
+  EXPECT_NEAR(written.Bounds().max.y(), 0.0, 1e-4) << "the ground-truth mesh includes the tyres, touching y = 0";
+  EXPECT_EQ(written.triangles.size(), car.mesh.triangles.size());
+  const cv::Mat depth = cv::imread(seq + "/gt/depth/000000_01.png", cv::IMREAD_UNCHANGED);
+  const cv::Mat object_map = cv::imread(seq + "/gt/obj_map/000000_01.png", cv::IMREAD_UNCHANGED);
+  const Eigen::Vector4d plane = ReadPlane(seq + "/planes/000000_01.txt");
+  ASSERT_FALSE(depth.empty());
+  PinholeCamera camera;
+  int cars_checked = 0;
+  for (int id = 1; id <= summary.num_tracks; ++id) {
+    double lowest = 1e9;
+    int below_body = 0, pixels = 0;
+    for (int v = 0; v < depth.rows; ++v) {
+      for (int u = 0; u < depth.cols; ++u) {
+        if (object_map.at<uint8_t>(v, u) != id || depth.at<uint16_t>(v, u) == 0) continue;
+        const Eigen::Vector3d p = camera.Ray(u, v) * (depth.at<uint16_t>(v, u) / 256.0);
+        const double height = plane.head<3>().dot(p) + plane[3];  // above the road (normal up)
+        lowest = std::min(lowest, height);
+        if (height < wheel_options.ground_clearance - 0.04) ++below_body;
+        ++pixels;
+      }
+    }
+    if (pixels < 2000) continue;  // far or hidden: too few pixels to see the tyres
+    ++cars_checked;
+    EXPECT_LT(lowest, 0.04) << "car " << id - 1 << ": the tyres touch the road";
+    EXPECT_GT(lowest, -0.02) << "car " << id - 1 << ": nothing below the road";
+    EXPECT_GT(below_body, 20) << "car " << id - 1 << ": tyre pixels under the lifted body";
+  }
+  EXPECT_GE(cars_checked, 1);
   fs::remove_all(root);
 }
 
