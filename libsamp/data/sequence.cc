@@ -306,6 +306,10 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
   }
   if (result.tracking.num_short_tracks > 0)
     LogInfo() << files.name << ": " << result.tracking.BriefReport();
+  for (const std::string& warning : result.tracking.warnings) {
+    LogWarning() << files.name << ": " << warning;
+    result.messages.push_back(files.name + ": " + warning);
+  }
 
   // Which (track, detection) pairs each frame serves.
   std::map<int, std::vector<std::pair<int, int>>> members_of_frame;  // frame -> (track, k)

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <nlohmann/json.hpp>
+#include <set>
 #include <sstream>
 
 #include "libsamp/core/error.h"
@@ -64,46 +66,444 @@ std::vector<int> HungarianRowsLeCols(const std::vector<double>& cost, int rows, 
   return col_of_row;
 }
 
-// Constant-velocity Kalman filter of a box centre in the world:
-// state (position, velocity), 6 x 6 covariance.
-struct TrackState {
-  std::vector<ObjectLabel> detections;
-  Eigen::Matrix<double, 6, 1> state = Eigen::Matrix<double, 6, 1>::Zero();
-  Eigen::Matrix<double, 6, 6> covariance = Eigen::Matrix<double, 6, 6>::Identity();
-  int last_frame = 0;
+constexpr double kPi = 3.14159265358979323846;
+
+using Matrix4d = Eigen::Matrix4d;
+using Vector4d = Eigen::Vector4d;
+
+// The world's ground plane: up = the mean of the cameras' up axes (-y), e1
+// along the first camera's x axis, e2 = up x e1 (forward for a level camera).
+struct GroundFrame {
+  Eigen::Vector3d up = -Eigen::Vector3d::UnitY();
+  Eigen::Vector3d e1 = Eigen::Vector3d::UnitX();
+  Eigen::Vector3d e2 = Eigen::Vector3d::UnitZ();
 };
 
-using Matrix6d = Eigen::Matrix<double, 6, 6>;
-
-// Covariance of a detected centre (world), from the noise model in the camera.
-Eigen::Matrix3d DetectionCovariance(const Eigen::Vector3d& center_in_camera,
-                                    const Eigen::Matrix3d& world_from_camera_rotation,
-                                    const TrackerOptions& o) {
-  Eigen::Vector3d ray(center_in_camera.x(), 0.0, center_in_camera.z());
-  const double d = ray.norm();
-  ray = d > 1e-9 ? Eigen::Vector3d(ray / d) : Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d lateral(ray.z(), 0.0, -ray.x());
-  const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
-  const double s_depth = o.depth_sigma_a + o.depth_sigma_b * d * d;
-  const double s_lateral = o.lateral_sigma_a + o.lateral_sigma_b * d;
-  const Eigen::Matrix3d in_camera = s_depth * s_depth * ray * ray.transpose() +
-                                    s_lateral * s_lateral * lateral * lateral.transpose() +
-                                    o.height_sigma * o.height_sigma * up * up.transpose();
-  return world_from_camera_rotation * in_camera * world_from_camera_rotation.transpose();
+GroundFrame MakeGroundFrame(const std::vector<FrameDetections>& frames) {
+  GroundFrame g;
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();
+  for (const FrameDetections& f : frames) up += f.world_from_camera.linear() * -Eigen::Vector3d::UnitY();
+  if (up.norm() < 1e-9) return g;
+  g.up = up.normalized();
+  Eigen::Vector3d x = frames.front().world_from_camera.linear() * Eigen::Vector3d::UnitX();
+  x -= g.up * g.up.dot(x);
+  if (x.norm() < 1e-6) x = g.up.unitOrthogonal();
+  g.e1 = x.normalized();
+  g.e2 = g.up.cross(g.e1);
+  return g;
 }
 
-// Prediction dt seconds ahead (white-acceleration process noise).
-void Predict(double dt, double acceleration_sigma, Eigen::Matrix<double, 6, 1>* state, Matrix6d* covariance) {
-  Matrix6d f = Matrix6d::Identity();
-  f.topRightCorner<3, 3>() = dt * Eigen::Matrix3d::Identity();
+// A detection in the ground plane.
+struct Observation {
+  int frame = 0;
+  double time = 0.0;
+  ObjectLabel label;             // as given, frame set
+  Eigen::Vector2d ground;        // bottom centre, ground-plane coordinates (e1, e2)
+  Eigen::Matrix2d ground_covariance;
+  double height = 0.0, height_variance = 0.0;  // along up
+  Eigen::Vector3d size;          // h, w, l
+  double axis = 0.0;             // heading in the ground plane modulo pi, [0, pi)
+};
+
+// Angle difference modulo pi, in [-pi/2, pi/2).
+double AxisDifference(double a, double b) {
+  double d = std::fmod(a - b, kPi);
+  if (d < -kPi / 2) d += kPi;
+  if (d >= kPi / 2) d -= kPi;
+  return d;
+}
+
+// Mean axis (modulo pi) of angles: the mean of the doubled-angle unit vectors.
+double MeanAxis(const std::vector<double>& axes) {
+  double c = 0, s = 0;
+  for (double a : axes) c += std::cos(2 * a), s += std::sin(2 * a);
+  double mean = 0.5 * std::atan2(s, c);
+  if (mean < 0) mean += kPi;
+  return mean;
+}
+
+Observation MakeObservation(const ObjectLabel& label, int frame, const Eigen::Isometry3d& world_from_camera,
+                            const GroundFrame& g, const TrackerOptions& o) {
+  Observation obs;
+  obs.frame = frame;
+  obs.time = frame / o.frame_rate_hz;
+  obs.label = label;
+  obs.label.frame = frame;
+  const Eigen::Vector3d& p = label.position;  // bottom centre, camera
+  Eigen::Vector3d ray(p.x(), 0.0, p.z());
+  const double d = ray.norm();
+  ray = d > 1e-9 ? Eigen::Vector3d(ray / d) : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d across(ray.z(), 0.0, -ray.x());
+  const Eigen::Vector3d vertical = Eigen::Vector3d::UnitY();
+  const double s_along = o.along_sigma_a + o.along_sigma_b * d + o.along_sigma_c * d * d;
+  const double s_across = o.across_sigma_a + o.across_sigma_b * d;
+  const double s_vertical = o.vertical_sigma_a + o.vertical_sigma_b * d;
+  const Eigen::Matrix3d in_camera = s_along * s_along * ray * ray.transpose() +
+                                    s_across * s_across * across * across.transpose() +
+                                    s_vertical * s_vertical * vertical * vertical.transpose();
+  const Eigen::Matrix3d& r = world_from_camera.linear();
+  const Eigen::Matrix3d in_world = r * in_camera * r.transpose();
+  Eigen::Matrix<double, 3, 2> e;
+  e.col(0) = g.e1;
+  e.col(1) = g.e2;
+  const Eigen::Vector3d p_world = world_from_camera * p;
+  obs.ground = e.transpose() * p_world;
+  obs.ground_covariance = e.transpose() * in_world * e;
+  obs.height = g.up.dot(p_world);
+  obs.height_variance = g.up.dot(in_world * g.up);
+  obs.size = Eigen::Vector3d(label.height, label.width, label.length);
+  // The object's x axis (front) in the camera is (cos ry, 0, -sin ry).
+  const Eigen::Vector3d front = r * Eigen::Vector3d(std::cos(label.rotation_y), 0.0, -std::sin(label.rotation_y));
+  double axis = std::atan2(g.e2.dot(front), g.e1.dot(front));
+  axis = std::fmod(axis + 2 * kPi, kPi);
+  obs.axis = axis;
+  return obs;
+}
+
+// White-acceleration process noise of the 2-D constant-velocity model over dt.
+Matrix4d ProcessNoise(double dt, double acceleration_sigma) {
   const double q = acceleration_sigma * acceleration_sigma;
-  Matrix6d noise = Matrix6d::Zero();
-  noise.topLeftCorner<3, 3>() = q * dt * dt * dt * dt / 4.0 * Eigen::Matrix3d::Identity();
-  noise.topRightCorner<3, 3>() = q * dt * dt * dt / 2.0 * Eigen::Matrix3d::Identity();
-  noise.bottomLeftCorner<3, 3>() = noise.topRightCorner<3, 3>();
-  noise.bottomRightCorner<3, 3>() = q * dt * dt * Eigen::Matrix3d::Identity();
-  *state = f * *state;
-  *covariance = f * *covariance * f.transpose() + noise;
+  const double t = std::abs(dt);
+  Matrix4d noise = Matrix4d::Zero();
+  noise.topLeftCorner<2, 2>() = q * t * t * t * t / 4.0 * Eigen::Matrix2d::Identity();
+  noise.topRightCorner<2, 2>() = q * dt * dt * dt / 2.0 * Eigen::Matrix2d::Identity();
+  noise.bottomLeftCorner<2, 2>() = noise.topRightCorner<2, 2>();
+  noise.bottomRightCorner<2, 2>() = q * t * t * Eigen::Matrix2d::Identity();
+  return noise;
+}
+
+Matrix4d Transition(double dt) {
+  Matrix4d f = Matrix4d::Identity();
+  f.topRightCorner<2, 2>() = dt * Eigen::Matrix2d::Identity();
+  return f;
+}
+
+// A track of the online stage.
+struct OnlineTrack {
+  std::vector<int> members;  // observation indices, increasing frames
+  Vector4d state = Vector4d::Zero();  // ground position, velocity
+  Matrix4d covariance = Matrix4d::Identity();
+  double time = 0.0;         // of the state
+  int last_frame = 0;
+  bool confirmed = false;
+  Eigen::Vector3d size_sum = Eigen::Vector3d::Zero();
+  double height_sum = 0.0;
+  Eigen::Vector2d axis_vector = Eigen::Vector2d(1, 0);  // smoothed (cos 2a, sin 2a)
+  int Count() const { return static_cast<int>(members.size()); }
+  double Axis() const {
+    double a = 0.5 * std::atan2(axis_vector.y(), axis_vector.x());
+    return a < 0 ? a + kPi : a;
+  }
+};
+
+// The association cost of an observation to a track predicted to its time
+// (state and covariance given), or kNoAssignment outside a gate.
+double AssociationCost(const OnlineTrack& track, const Vector4d& predicted, const Matrix4d& predicted_covariance,
+                       const Observation& obs, const TrackerOptions& o) {
+  const Eigen::Vector2d innovation = obs.ground - predicted.head<2>();
+  const Eigen::Matrix2d s = predicted_covariance.topLeftCorner<2, 2>() + obs.ground_covariance;
+  const double d2_position = innovation.dot(s.ldlt().solve(innovation));
+  if (!(d2_position <= o.gate_chi2)) return kNoAssignment;
+  const double n = track.Count();
+  const Eigen::Vector3d size_difference = obs.size - track.size_sum / n;
+  const double d2_size = size_difference.squaredNorm() / (o.size_sigma * o.size_sigma * (1.0 + 1.0 / n));
+  if (!(d2_size <= o.size_gate_chi2)) return kNoAssignment;
+  const double height_difference = obs.height - track.height_sum / n;
+  const double d2_height = height_difference * height_difference / (obs.height_variance * (1.0 + 1.0 / n));
+  if (!(d2_height <= o.height_gate_chi2)) return kNoAssignment;
+  const double axis_difference = AxisDifference(obs.axis, track.Axis());
+  if (std::abs(axis_difference) > o.yaw_gate_deg * kPi / 180.0) return kNoAssignment;
+  const double s_yaw = o.yaw_sigma_deg * kPi / 180.0;
+  const double d2_axis = axis_difference * axis_difference / (1.5 * s_yaw * s_yaw);
+  return d2_position + d2_size + d2_height + d2_axis + (track.confirmed ? 0.0 : o.tentative_penalty);
+}
+
+void AddObservation(int index, const Observation& obs, OnlineTrack* track) {
+  track->members.push_back(index);
+  track->last_frame = obs.frame;
+  track->size_sum += obs.size;
+  track->height_sum += obs.height;
+  const Eigen::Vector2d v(std::cos(2 * obs.axis), std::sin(2 * obs.axis));
+  if (track->Count() == 1) {
+    track->axis_vector = v;
+  } else {
+    const Eigen::Vector2d mixed = 0.5 * track->axis_vector + 0.5 * v;
+    if (mixed.norm() > 1e-9) track->axis_vector = mixed.normalized();
+  }
+}
+
+// The online stage: returns the tracks (observation indices), in order of creation.
+std::vector<std::vector<int>> LinkOnline(const std::vector<FrameDetections>& frames,
+                                         const std::vector<std::vector<int>>& observations_of_frame,
+                                         const std::vector<Observation>& observations, const TrackerOptions& o) {
+  std::vector<OnlineTrack> tracks;
+  std::vector<int> active;
+  for (size_t f = 0; f < frames.size(); ++f) {
+    const int frame = frames[f].frame;
+    const double time = frame / o.frame_rate_hz;
+    active.erase(std::remove_if(active.begin(), active.end(),
+                                [&](int t) {
+                                  const int missed = frame - tracks[t].last_frame - 1;
+                                  return missed > (tracks[t].confirmed ? o.max_misses : o.tentative_max_misses);
+                                }),
+                 active.end());
+    const std::vector<int>& obs = observations_of_frame[f];
+    const int rows = static_cast<int>(active.size()), cols = static_cast<int>(obs.size());
+    std::vector<Vector4d> predicted(rows);
+    std::vector<Matrix4d> predicted_covariance(rows);
+    std::vector<double> cost(static_cast<size_t>(rows) * cols, kNoAssignment);
+    for (int a = 0; a < rows; ++a) {
+      const OnlineTrack& track = tracks[active[a]];
+      const double dt = time - track.time;
+      const Matrix4d transition = Transition(dt);
+      predicted[a] = transition * track.state;
+      predicted_covariance[a] = transition * track.covariance * transition.transpose() +
+                                ProcessNoise(dt, o.acceleration_sigma);
+      for (int k = 0; k < cols; ++k)
+        cost[static_cast<size_t>(a) * cols + k] =
+            AssociationCost(track, predicted[a], predicted_covariance[a], observations[obs[k]], o);
+    }
+    const std::vector<int> assignment = SolveAssignment(cost, rows, cols);
+    std::vector<char> taken(cols, 0);
+    for (int a = 0; a < rows; ++a) {
+      const int k = assignment[a];
+      if (k < 0) continue;
+      taken[k] = 1;
+      OnlineTrack& track = tracks[active[a]];
+      const Observation& ob = observations[obs[k]];
+      // Kalman update with the detected ground position (H = [I 0]).
+      const Matrix4d& p = predicted_covariance[a];
+      const Eigen::Matrix2d s = p.topLeftCorner<2, 2>() + ob.ground_covariance;
+      const Eigen::Matrix<double, 4, 2> gain = p.leftCols<2>() * s.inverse();
+      track.state = predicted[a] + gain * (ob.ground - predicted[a].head<2>());
+      const Matrix4d covariance = p - gain * p.topRows<2>();
+      track.covariance = 0.5 * (covariance + covariance.transpose());
+      track.time = time;
+      AddObservation(obs[k], ob, &track);
+      if (track.Count() >= o.confirm_hits) track.confirmed = true;
+    }
+    for (int k = 0; k < cols; ++k) {
+      if (taken[k]) continue;
+      const Observation& ob = observations[obs[k]];
+      OnlineTrack track;
+      track.state.head<2>() = ob.ground;
+      track.covariance.setZero();
+      track.covariance.topLeftCorner<2, 2>() = ob.ground_covariance;
+      const double s_v = o.max_speed / 2.0;
+      track.covariance.bottomRightCorner<2, 2>() = s_v * s_v * Eigen::Matrix2d::Identity();
+      track.time = time;
+      AddObservation(obs[k], ob, &track);
+      track.confirmed = track.Count() >= o.confirm_hits;
+      tracks.push_back(std::move(track));
+      active.push_back(static_cast<int>(tracks.size()) - 1);
+    }
+  }
+  std::vector<std::vector<int>> result;
+  for (OnlineTrack& t : tracks) result.push_back(std::move(t.members));
+  return result;
+}
+
+// Weighted least-squares constant-velocity fit of observations in the ground
+// plane, state (position, velocity) at time t_ref, with a zero-velocity prior
+// of std. dev. max_speed / 2 and a model error growing with the time from t_ref.
+struct MotionFit {
+  Vector4d state = Vector4d::Zero();
+  Matrix4d covariance = Matrix4d::Identity();
+  double time = 0.0;
+};
+
+MotionFit FitConstantVelocity(const std::vector<Observation>& observations, const std::vector<int>& members,
+                              double t_ref, const TrackerOptions& o) {
+  const double s_v = o.max_speed / 2.0;
+  Matrix4d information = Matrix4d::Zero();
+  information.bottomRightCorner<2, 2>() = Eigen::Matrix2d::Identity() / (s_v * s_v);
+  Vector4d rhs = Vector4d::Zero();
+  for (int m : members) {
+    const Observation& ob = observations[m];
+    const double dt = ob.time - t_ref;
+    Eigen::Matrix<double, 2, 4> a;
+    a << 1, 0, dt, 0, 0, 1, 0, dt;
+    const double model = 0.5 * o.acceleration_sigma * dt * dt;
+    const Eigen::Matrix2d w = (ob.ground_covariance + model * model * Eigen::Matrix2d::Identity()).inverse();
+    information += a.transpose() * w * a;
+    rhs += a.transpose() * w * ob.ground;
+  }
+  MotionFit fit;
+  fit.time = t_ref;
+  fit.covariance = information.inverse();
+  fit.state = fit.covariance * rhs;
+  return fit;
+}
+
+MotionFit Extrapolate(const MotionFit& fit, double time, const TrackerOptions& o) {
+  const double dt = time - fit.time;
+  const Matrix4d f = Transition(dt);
+  MotionFit out;
+  out.time = time;
+  out.state = f * fit.state;
+  out.covariance = f * fit.covariance * f.transpose() + ProcessNoise(dt, o.acceleration_sigma);
+  return out;
+}
+
+// The cost of continuing `head` (observations, increasing frames) with `tail`
+// (all later): squared Mahalanobis distance of the two constant-velocity fits
+// (each of fit_window observations next to the gap) at the gap's middle, plus
+// size, height and axis terms; kNoAssignment beyond the axis gate.
+double LinkCost(const std::vector<Observation>& observations, const std::vector<int>& head,
+                const std::vector<int>& tail, const TrackerOptions& o) {
+  const size_t k = static_cast<size_t>(o.fit_window);
+  const std::vector<int> h(head.end() - std::min(k, head.size()), head.end());
+  const std::vector<int> t(tail.begin(), tail.begin() + std::min(k, tail.size()));
+  const double t_head = observations[h.back()].time, t_tail = observations[t.front()].time;
+  const double t_mid = 0.5 * (t_head + t_tail);
+  const MotionFit a = Extrapolate(FitConstantVelocity(observations, h, t_head, o), t_mid, o);
+  const MotionFit b = Extrapolate(FitConstantVelocity(observations, t, t_tail, o), t_mid, o);
+  const Vector4d difference = a.state - b.state;
+  const double d2_motion = difference.dot((a.covariance + b.covariance).ldlt().solve(difference));
+  auto means = [&](const std::vector<int>& members, Eigen::Vector3d* size, double* height, double* height_var,
+                   double* axis) {
+    *size = Eigen::Vector3d::Zero();
+    *height = *height_var = 0.0;
+    std::vector<double> axes;
+    for (int m : members) {
+      *size += observations[m].size;
+      *height += observations[m].height;
+      *height_var += observations[m].height_variance;
+      axes.push_back(observations[m].axis);
+    }
+    *size /= double(members.size());
+    *height /= double(members.size());
+    *height_var /= double(members.size()) * double(members.size());
+    *axis = MeanAxis(axes);
+  };
+  Eigen::Vector3d size_h, size_t;
+  double height_h, height_t, var_h, var_t, axis_h, axis_t;
+  means(h, &size_h, &height_h, &var_h, &axis_h);
+  means(t, &size_t, &height_t, &var_t, &axis_t);
+  const double nh = double(h.size()), nt = double(t.size());
+  const double d2_size = (size_h - size_t).squaredNorm() / (o.size_sigma * o.size_sigma * (1.0 / nh + 1.0 / nt));
+  const double d2_height = (height_h - height_t) * (height_h - height_t) / (var_h + var_t);
+  const double axis_difference = AxisDifference(axis_h, axis_t);
+  if (std::abs(axis_difference) > o.yaw_gate_deg * kPi / 180.0) return kNoAssignment;
+  const double s_yaw = o.yaw_sigma_deg * kPi / 180.0;
+  const double turn = 0.5 * (t_tail - t_head);  // a turning car: up to ~0.5 rad/s
+  const double d2_axis = axis_difference * axis_difference / (s_yaw * s_yaw * (1.0 / nh + 1.0 / nt) + turn * turn);
+  return d2_motion + d2_size + d2_height + d2_axis;
+}
+
+int FirstFrame(const std::vector<Observation>& obs, const std::vector<int>& t) { return obs[t.front()].frame; }
+int LastFrame(const std::vector<Observation>& obs, const std::vector<int>& t) { return obs[t.back()].frame; }
+
+// Joins fragment ends to later fragment starts (one-to-one, Hungarian on the
+// gated link costs). Returns the number of joins.
+int JoinFragments(const std::vector<Observation>& observations, const TrackerOptions& o,
+                  std::vector<std::vector<int>>* tracks) {
+  std::vector<std::vector<int>>& t = *tracks;
+  const int n = static_cast<int>(t.size());
+  std::vector<double> cost(static_cast<size_t>(n) * n, kNoAssignment);
+  bool any = false;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; j < n; ++j) {
+      // A single detection (a false positive, mostly) joins nothing.
+      if (i == j || t[i].size() < 2 || t[j].size() < 2) continue;
+      const int gap = FirstFrame(observations, t[j]) - LastFrame(observations, t[i]) - 1;
+      if (gap < 0 || gap > o.max_join_gap) continue;
+      const double c = LinkCost(observations, t[i], t[j], o);
+      if (c <= o.join_gate_chi2) {
+        cost[static_cast<size_t>(i) * n + j] = c;
+        any = true;
+      }
+    }
+  }
+  if (!any) return 0;
+  const std::vector<int> next = SolveAssignment(cost, n, n);
+  std::vector<char> has_previous(n, 0);
+  int joins = 0;
+  for (int i = 0; i < n; ++i)
+    if (next[i] >= 0) has_previous[next[i]] = 1, ++joins;
+  std::vector<std::vector<int>> joined;
+  for (int i = 0; i < n; ++i) {
+    if (has_previous[i]) continue;
+    std::vector<int> chain;
+    for (int j = i; j >= 0; j = next[j]) chain.insert(chain.end(), t[j].begin(), t[j].end());
+    joined.push_back(std::move(chain));
+  }
+  t = std::move(joined);
+  return joins;
+}
+
+// Cost of a link inside a track; 0 when one side is empty.
+double InnerCost(const std::vector<Observation>& observations, const std::vector<int>& head,
+                 const std::vector<int>& tail, const TrackerOptions& o) {
+  if (head.empty() || tail.empty()) return 0.0;
+  const int gap = FirstFrame(observations, tail) - LastFrame(observations, head) - 1;
+  if (gap > o.max_join_gap) return kNoAssignment;
+  return std::min(kNoAssignment, LinkCost(observations, head, tail, o));
+}
+
+// Two tracks whose detections come within `radius` (ground plane) in frames at
+// most one apart.
+bool ComeClose(const std::vector<Observation>& observations, const std::vector<int>& a, const std::vector<int>& b,
+               double radius) {
+  for (int i : a)
+    for (int j : b)
+      if (std::abs(observations[i].frame - observations[j].frame) <= 1 &&
+          (observations[i].ground - observations[j].ground).norm() <= radius)
+        return true;
+  return false;
+}
+
+// Swaps tails between pairs of tracks while the best swap lowers the sum of
+// the two link costs by more than swap_margin. Returns the number of swaps.
+int ResolveSwitches(const std::vector<Observation>& observations, const TrackerOptions& o,
+                    std::vector<std::vector<int>>* tracks) {
+  std::vector<std::vector<int>>& t = *tracks;
+  constexpr double kSwapRadius = 5.0;  // m: only tracks that come this close can have switched
+  int swaps = 0;
+  for (int pass = 0; pass < 1000; ++pass) {
+    double best_gain = o.swap_margin;
+    int best_x = -1, best_y = -1, best_split = 0;
+    for (size_t x = 0; x < t.size(); ++x) {
+      for (size_t y = x + 1; y < t.size(); ++y) {
+        const int lo = std::max(FirstFrame(observations, t[x]), FirstFrame(observations, t[y]));
+        const int hi = std::min(LastFrame(observations, t[x]), LastFrame(observations, t[y]));
+        if (lo > hi + o.max_join_gap + 1) continue;  // far apart in time
+        if (!ComeClose(observations, t[x], t[y], kSwapRadius)) continue;
+        std::set<int> splits;
+        for (int m : t[x]) splits.insert(observations[m].frame);
+        for (int m : t[y]) splits.insert(observations[m].frame);
+        for (int s : splits) {
+          auto split = [&](const std::vector<int>& track, std::vector<int>* head, std::vector<int>* tail) {
+            head->clear(), tail->clear();
+            for (int m : track) (observations[m].frame < s ? head : tail)->push_back(m);
+          };
+          std::vector<int> xh, xt, yh, yt;
+          split(t[x], &xh, &xt);
+          split(t[y], &yh, &yt);
+          // Both tracks continue across the split, each part with two detections at least:
+          // links of different lengths are not comparable by their costs.
+          if (xh.size() < 2 || yh.size() < 2 || xt.size() < 2 || yt.size() < 2) continue;
+          const double current = InnerCost(observations, xh, xt, o) + InnerCost(observations, yh, yt, o);
+          const double swapped_a = InnerCost(observations, xh, yt, o), swapped_b = InnerCost(observations, yh, xt, o);
+          if (swapped_a >= kNoAssignment || swapped_b >= kNoAssignment) continue;
+          if (swapped_a > o.join_gate_chi2 || swapped_b > o.join_gate_chi2) continue;
+          const double gain = std::min(current, 1e12) - (swapped_a + swapped_b);
+          if (gain > best_gain) best_gain = gain, best_x = int(x), best_y = int(y), best_split = s;
+        }
+      }
+    }
+    if (best_x < 0) break;
+    std::vector<int> xh, xt, yh, yt;
+    for (int m : t[best_x]) (observations[m].frame < best_split ? xh : xt).push_back(m);
+    for (int m : t[best_y]) (observations[m].frame < best_split ? yh : yt).push_back(m);
+    xh.insert(xh.end(), yt.begin(), yt.end());
+    yh.insert(yh.end(), xt.begin(), xt.end());
+    t[best_x] = std::move(xh);
+    t[best_y] = std::move(yh);
+    t.erase(std::remove_if(t.begin(), t.end(), [](const std::vector<int>& v) { return v.empty(); }), t.end());
+    ++swaps;
+  }
+  return swaps;
 }
 
 std::string DescribeShortTrack(const std::vector<ObjectLabel>& detections) {
@@ -113,30 +513,118 @@ std::string DescribeShortTrack(const std::vector<ObjectLabel>& detections) {
   return s.str();
 }
 
+double MedianLength(std::vector<int> lengths) {
+  if (lengths.empty()) return 0.0;
+  std::sort(lengths.begin(), lengths.end());
+  const size_t n = lengths.size();
+  return n % 2 == 1 ? lengths[n / 2] : 0.5 * (lengths[n / 2 - 1] + lengths[n / 2]);
+}
+
+// Fills the counts of kept tracks, their median length and the warning.
+void FinishSummary(const std::vector<LinkedTrack>& tracks, int warn_median_length, TrackingSummary* summary) {
+  summary->num_tracks = static_cast<int>(tracks.size());
+  std::vector<int> lengths;
+  for (const LinkedTrack& t : tracks) lengths.push_back(static_cast<int>(t.detections.size()));
+  summary->median_track_length = MedianLength(lengths);
+  if (!tracks.empty() && summary->median_track_length < warn_median_length) {
+    std::ostringstream w;
+    w << "median track length " << summary->median_track_length << " detections < " << warn_median_length
+      << " (" << tracks.size() << " tracks of " << summary->num_detections
+      << " detections): the tracker may be splitting cars; check the detector noise options "
+         "(--tracker-*, docs/sequence_format.md) or give tracks with --tracks";
+    summary->warnings.push_back(w.str());
+  }
+}
+
 }  // namespace
 
 bool TrackerOptions::Check() const {
-  SAMP_CHECK(depth_sigma_a > 0 && depth_sigma_b >= 0 && lateral_sigma_a > 0 && lateral_sigma_b >= 0 &&
-             height_sigma > 0)
-      << "TrackerOptions: detector noise sigmas must be > 0 (the *_b terms >= 0)";
+  SAMP_CHECK(along_sigma_a > 0 && along_sigma_b >= 0 && along_sigma_c >= 0)
+      << "TrackerOptions: along_sigma_a must be > 0, along_sigma_b and along_sigma_c >= 0";
+  SAMP_CHECK(across_sigma_a > 0 && across_sigma_b >= 0)
+      << "TrackerOptions: across_sigma_a must be > 0, across_sigma_b >= 0";
+  SAMP_CHECK(vertical_sigma_a > 0 && vertical_sigma_b >= 0)
+      << "TrackerOptions: vertical_sigma_a must be > 0, vertical_sigma_b >= 0";
+  SAMP_CHECK(size_sigma > 0) << "TrackerOptions.size_sigma must be > 0";
+  SAMP_CHECK(yaw_sigma_deg > 0) << "TrackerOptions.yaw_sigma_deg must be > 0";
   SAMP_CHECK(acceleration_sigma > 0) << "TrackerOptions.acceleration_sigma must be > 0";
   SAMP_CHECK(max_speed > 0) << "TrackerOptions.max_speed must be > 0";
-  SAMP_CHECK(gate_chi2 > 0) << "TrackerOptions.gate_chi2 must be > 0";
+  SAMP_CHECK(gate_chi2 > 0 && size_gate_chi2 > 0 && height_gate_chi2 > 0)
+      << "TrackerOptions: gate_chi2, size_gate_chi2 and height_gate_chi2 must be > 0";
+  SAMP_CHECK(yaw_gate_deg > 0 && yaw_gate_deg <= 90) << "TrackerOptions.yaw_gate_deg must be in (0, 90]";
+  SAMP_CHECK(tentative_penalty >= 0) << "TrackerOptions.tentative_penalty must be >= 0";
+  SAMP_CHECK(confirm_hits >= 1) << "TrackerOptions.confirm_hits must be >= 1";
+  SAMP_CHECK(tentative_max_misses >= 0) << "TrackerOptions.tentative_max_misses must be >= 0";
   SAMP_CHECK(max_misses >= 0) << "TrackerOptions.max_misses must be >= 0";
+  SAMP_CHECK(max_join_gap >= 0) << "TrackerOptions.max_join_gap must be >= 0";
+  SAMP_CHECK(join_gate_chi2 > 0) << "TrackerOptions.join_gate_chi2 must be > 0";
+  SAMP_CHECK(swap_margin >= 0) << "TrackerOptions.swap_margin must be >= 0";
+  SAMP_CHECK(fit_window >= 1) << "TrackerOptions.fit_window must be >= 1";
   SAMP_CHECK(min_track_length >= 1) << "TrackerOptions.min_track_length must be >= 1";
   SAMP_CHECK(frame_rate_hz > 0) << "TrackerOptions.frame_rate_hz must be > 0";
+  SAMP_CHECK(warn_median_length >= 0) << "TrackerOptions.warn_median_length must be >= 0";
   return true;
+}
+
+std::string TrackerOptions::ToJson() const {
+  const nlohmann::json j = {{"along_sigma_a", along_sigma_a},
+                            {"along_sigma_b", along_sigma_b},
+                            {"along_sigma_c", along_sigma_c},
+                            {"across_sigma_a", across_sigma_a},
+                            {"across_sigma_b", across_sigma_b},
+                            {"vertical_sigma_a", vertical_sigma_a},
+                            {"vertical_sigma_b", vertical_sigma_b},
+                            {"size_sigma", size_sigma},
+                            {"yaw_sigma_deg", yaw_sigma_deg},
+                            {"acceleration_sigma", acceleration_sigma},
+                            {"max_speed", max_speed},
+                            {"gate_chi2", gate_chi2},
+                            {"size_gate_chi2", size_gate_chi2},
+                            {"height_gate_chi2", height_gate_chi2},
+                            {"yaw_gate_deg", yaw_gate_deg},
+                            {"tentative_penalty", tentative_penalty},
+                            {"confirm_hits", confirm_hits},
+                            {"tentative_max_misses", tentative_max_misses},
+                            {"max_misses", max_misses},
+                            {"join_fragments", join_fragments},
+                            {"max_join_gap", max_join_gap},
+                            {"join_gate_chi2", join_gate_chi2},
+                            {"resolve_switches", resolve_switches},
+                            {"swap_margin", swap_margin},
+                            {"fit_window", fit_window},
+                            {"min_track_length", min_track_length},
+                            {"frame_rate_hz", frame_rate_hz},
+                            {"warn_median_length", warn_median_length}};
+  return j.dump();
 }
 
 std::string TrackingSummary::BriefReport() const {
   std::ostringstream s;
-  s << num_detections << " detections -> " << num_tracks << " tracks";
+  s << num_detections << " detections -> " << num_tracks << " tracks (median " << median_track_length
+    << " detections";
+  if (num_online_tracks > 0)
+    s << "; " << num_online_tracks << " online, " << num_joins << " joins, " << num_swaps << " swaps";
+  s << ")";
   if (num_short_tracks > 0) {
     s << "; dropped " << num_short_tracks << " short track(s) (" << num_short_detections
       << " detections):";
     for (const std::string& t : short_tracks) s << " [" << t << "]";
   }
+  for (const std::string& w : warnings) s << "; WARNING: " << w;
   return s.str();
+}
+
+std::string TrackingSummary::ToJson() const {
+  const nlohmann::json j = {{"detections", num_detections},
+                            {"tracks", num_tracks},
+                            {"median_track_length", median_track_length},
+                            {"online_tracks", num_online_tracks},
+                            {"joins", num_joins},
+                            {"swaps", num_swaps},
+                            {"short_tracks_dropped", num_short_tracks},
+                            {"short_track_detections", num_short_detections},
+                            {"warnings", warnings}};
+  return j.dump();
 }
 
 std::vector<int> SolveAssignment(const std::vector<double>& cost, int rows, int cols) {
@@ -171,6 +659,7 @@ std::vector<int> SolveAssignment(const std::vector<double>& cost, int rows, int 
   return result;
 }
 
+
 std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& frames,
                                         const TrackerOptions& options, TrackingSummary* summary) {
   options.Check();
@@ -178,98 +667,56 @@ std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& fram
     SAMP_CHECK(frames[i].frame > frames[i - 1].frame)
         << "LinkDetections: frames must increase (" << frames[i - 1].frame << " then "
         << frames[i].frame << ")";
-  std::vector<TrackState> tracks;   // in order of creation
-  std::vector<int> active;          // indices into tracks
-  int num_detections = 0;
-  for (const FrameDetections& frame : frames) {
-    // End tracks that missed too many frames.
-    active.erase(std::remove_if(active.begin(), active.end(),
-                                [&](int t) { return frame.frame - tracks[t].last_frame - 1 > options.max_misses; }),
-                 active.end());
-    const int num = static_cast<int>(frame.detections.size());
-    num_detections += num;
-    std::vector<Eigen::Vector3d> centers(num);
-    std::vector<Eigen::Matrix3d> noise(num);
-    for (int k = 0; k < num; ++k) {
-      const Eigen::Vector3d in_camera = DetectionCenter(frame.detections[k]);
-      centers[k] = frame.world_from_camera * in_camera;
-      noise[k] = DetectionCovariance(in_camera, frame.world_from_camera.linear(), options);
-    }
-
-    // Predict every live track to this frame; gate and cost by the squared
-    // Mahalanobis distance of each detection to the prediction.
-    const int rows = static_cast<int>(active.size());
-    std::vector<Eigen::Matrix<double, 6, 1>> predicted(rows);
-    std::vector<Matrix6d> predicted_covariance(rows);
-    std::vector<double> cost(static_cast<size_t>(rows) * num, kNoAssignment);
-    for (int a = 0; a < rows; ++a) {
-      const TrackState& track = tracks[active[a]];
-      const double dt = (frame.frame - track.last_frame) / options.frame_rate_hz;
-      predicted[a] = track.state;
-      predicted_covariance[a] = track.covariance;
-      Predict(dt, options.acceleration_sigma, &predicted[a], &predicted_covariance[a]);
-      for (int k = 0; k < num; ++k) {
-        const Eigen::Vector3d innovation = centers[k] - predicted[a].head<3>();
-        const Eigen::Matrix3d s = predicted_covariance[a].topLeftCorner<3, 3>() + noise[k];
-        const double d2 = innovation.dot(s.ldlt().solve(innovation));
-        if (d2 <= options.gate_chi2) cost[static_cast<size_t>(a) * num + k] = d2;
-      }
-    }
-    const std::vector<int> assignment = SolveAssignment(cost, rows, num);
-    std::vector<char> taken(num, 0);
-    for (int a = 0; a < rows; ++a) {
-      const int k = assignment[a];
-      if (k < 0) continue;
-      taken[k] = 1;
-      TrackState& track = tracks[active[a]];
-      // Kalman update with the detected centre (H = [I 0]).
-      const Matrix6d& p = predicted_covariance[a];
-      const Eigen::Matrix3d s = p.topLeftCorner<3, 3>() + noise[k];
-      const Eigen::Matrix<double, 6, 3> gain = p.leftCols<3>() * s.inverse();
-      track.state = predicted[a] + gain * (centers[k] - predicted[a].head<3>());
-      const Matrix6d covariance = p - gain * p.topRows<3>();
-      track.covariance = 0.5 * (covariance + covariance.transpose());
-      track.last_frame = frame.frame;
-      ObjectLabel label = frame.detections[k];
-      label.frame = frame.frame;
-      track.detections.push_back(label);
-    }
-    for (int k = 0; k < num; ++k) {
-      if (taken[k]) continue;
-      TrackState track;
-      track.state.head<3>() = centers[k];
-      track.covariance.setZero();
-      track.covariance.topLeftCorner<3, 3>() = noise[k];
-      const double s_v = options.max_speed / 2.0;
-      track.covariance.bottomRightCorner<3, 3>() = s_v * s_v * Eigen::Matrix3d::Identity();
-      track.last_frame = frame.frame;
-      ObjectLabel label = frame.detections[k];
-      label.frame = frame.frame;
-      track.detections.push_back(label);
-      tracks.push_back(track);
-      active.push_back(static_cast<int>(tracks.size()) - 1);
+  const GroundFrame ground = MakeGroundFrame(frames);
+  std::vector<Observation> observations;
+  std::vector<std::vector<int>> observations_of_frame(frames.size());
+  for (size_t f = 0; f < frames.size(); ++f) {
+    for (const ObjectLabel& label : frames[f].detections) {
+      SAMP_CHECK(label.height > 0 && label.width > 0 && label.length > 0 && label.position.allFinite() &&
+                 std::isfinite(label.rotation_y))
+          << "LinkDetections: frame " << frames[f].frame << ": a detection has a non-positive size or "
+          << "a non-finite position/yaw";
+      observations_of_frame[f].push_back(static_cast<int>(observations.size()));
+      observations.push_back(
+          MakeObservation(label, frames[f].frame, frames[f].world_from_camera, ground, options));
     }
   }
 
+  std::vector<std::vector<int>> tracks = LinkOnline(frames, observations_of_frame, observations, options);
   TrackingSummary local;
   TrackingSummary& result = summary != nullptr ? *summary : local;
   result = TrackingSummary();
-  result.num_detections = num_detections;
+  result.num_detections = static_cast<int>(observations.size());
+  result.num_online_tracks = static_cast<int>(tracks.size());
+  for (int round = 0; round < 2; ++round) {
+    const int swaps = options.resolve_switches ? ResolveSwitches(observations, options, &tracks) : 0;
+    const int joins = options.join_fragments ? JoinFragments(observations, options, &tracks) : 0;
+    result.num_swaps += swaps;
+    result.num_joins += joins;
+    if (swaps == 0 && joins == 0) break;
+  }
+
+  // Ids in order of first appearance (first frame, then detection index).
+  for (std::vector<int>& t : tracks) std::sort(t.begin(), t.end());
+  std::sort(tracks.begin(), tracks.end(),
+            [](const std::vector<int>& a, const std::vector<int>& b) { return a.front() < b.front(); });
   std::vector<LinkedTrack> linked;
-  for (const TrackState& track : tracks) {
-    if (static_cast<int>(track.detections.size()) < options.min_track_length) {
+  for (const std::vector<int>& t : tracks) {
+    std::vector<ObjectLabel> detections;
+    for (int m : t) detections.push_back(observations[m].label);
+    if (static_cast<int>(detections.size()) < options.min_track_length) {
       ++result.num_short_tracks;
-      result.num_short_detections += static_cast<int>(track.detections.size());
-      result.short_tracks.push_back(DescribeShortTrack(track.detections));
+      result.num_short_detections += static_cast<int>(detections.size());
+      result.short_tracks.push_back(DescribeShortTrack(detections));
       continue;
     }
     LinkedTrack out;
     out.id = static_cast<int>(linked.size());
-    out.detections = track.detections;
+    out.detections = std::move(detections);
     for (ObjectLabel& label : out.detections) label.track_id = out.id;
-    linked.push_back(out);
+    linked.push_back(std::move(out));
   }
-  result.num_tracks = static_cast<int>(linked.size());
+  FinishSummary(linked, options.warn_median_length, &result);
   return linked;
 }
 
@@ -304,7 +751,7 @@ std::vector<LinkedTrack> TracksFromLabels(const std::vector<ObjectLabel>& labels
     }
     tracks.push_back(LinkedTrack{id, detections});
   }
-  result.num_tracks = static_cast<int>(tracks.size());
+  FinishSummary(tracks, 0, &result);
   return tracks;
 }
 

@@ -45,7 +45,8 @@ std::string RunFitSummary::BriefReport() const {
       s << "FAILED: " << q.error;
       continue;
     }
-    s << q.num_fitted << "/" << q.num_tracks << " tracks, " << q.seconds << " s";
+    s << q.num_fitted << "/" << q.num_tracks << " tracks, " << q.seconds << " s; tracker: "
+      << q.input.tracking.BriefReport();
     for (const auto& f : q.track_failures) s << "\n    skipped " << f;
   }
   return s.str();
@@ -170,6 +171,7 @@ RunFitSummary RunFit(const RunFitOptions& options) {
     if (!r.ok) js["error"] = r.error;
     js["input"] = r.input.BriefReport();
     js["input_messages"] = r.input.messages;
+    if (r.ok) js["tracking"] = nlohmann::json::parse(r.input.tracking.ToJson());
     js["tracks"] = w.tracks_json;
     js["failed_tracks"] = r.track_failures;
     tracks_json["sequences"].push_back(js);
@@ -196,18 +198,7 @@ RunFitSummary RunFit(const RunFitOptions& options) {
         {"sigma_disparity_px", so.observations.sigma_disparity_px},
         {"max_points_per_frame", so.observations.max_points_per_frame},
         {"seed", so.observations.seed}}},
-      {"tracker",
-       {{"depth_sigma_a", so.tracker.depth_sigma_a},
-        {"depth_sigma_b", so.tracker.depth_sigma_b},
-        {"lateral_sigma_a", so.tracker.lateral_sigma_a},
-        {"lateral_sigma_b", so.tracker.lateral_sigma_b},
-        {"height_sigma", so.tracker.height_sigma},
-        {"acceleration_sigma", so.tracker.acceleration_sigma},
-        {"max_speed", so.tracker.max_speed},
-        {"gate_chi2", so.tracker.gate_chi2},
-        {"max_misses", so.tracker.max_misses},
-        {"min_track_length", so.tracker.min_track_length},
-        {"frame_rate_hz", so.tracker.frame_rate_hz}}}};
+      {"tracker", nlohmann::json::parse(so.tracker.ToJson())}};
   config["num_threads"] = options.num_threads;
   config["write_meshes"] = options.write_meshes;
   WriteTextFileAtomically((fs::path(options.output_dir) / "config.json").string(), config.dump(2) + "\n");

@@ -6,6 +6,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/pipeline/run_fit.h"
+#include "libsamp/data/tracking.h"
 #include "libsamp/viz/fit_pictures.h"
 #include "tools/samp/commands.h"
 
@@ -14,6 +15,81 @@
 #endif
 
 namespace samp::tools {
+
+namespace {
+
+// The tracker's options (docs/sequence_format.md, "Tracking by detection"):
+// the noise model as comma-separated coefficients, then gates and rules.
+void AddTrackerOptions(CLI::App* command, TrackerOptions* tracker) {
+  auto coefficients = [command](const std::string& name, const std::string& help, std::vector<double*> targets) {
+    std::string defaults;
+    for (double* t : targets) defaults += (defaults.empty() ? "" : ",") + CLI::detail::to_string(*t);
+    command
+        ->add_option_function<std::vector<double>>(
+            name,
+            [targets, name](const std::vector<double>& values) {
+              SAMP_CHECK(values.size() == targets.size())
+                  << name << " takes " << targets.size() << " comma-separated values, got " << values.size();
+              for (size_t i = 0; i < values.size(); ++i) *targets[i] = values[i];
+            },
+            help + " [" + defaults + "]")
+        ->delimiter(',')
+        ->expected(int(targets.size()));
+  };
+  coefficients("--tracker-along-sigma",
+               "Tracker: detector std. dev. along the viewing ray a,b,c: a + b d + c d^2 (m, d = distance)",
+               {&tracker->along_sigma_a, &tracker->along_sigma_b, &tracker->along_sigma_c});
+  coefficients("--tracker-across-sigma", "Tracker: detector std. dev. across the ray a,b: a + b d (m)",
+               {&tracker->across_sigma_a, &tracker->across_sigma_b});
+  coefficients("--tracker-vertical-sigma", "Tracker: detector vertical std. dev. a,b: a + b d (m)",
+               {&tracker->vertical_sigma_a, &tracker->vertical_sigma_b});
+  command->add_option("--tracker-size-sigma", tracker->size_sigma,
+                      "Tracker: std. dev. of each detected box dimension, m")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--tracker-yaw-sigma", tracker->yaw_sigma_deg,
+                      "Tracker: std. dev. of the detected yaw modulo 180 deg, deg")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--tracker-acceleration-sigma", tracker->acceleration_sigma,
+                      "Tracker: white acceleration noise of the constant-velocity model, m/s^2")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--tracker-gate", tracker->gate_chi2,
+                      "Tracker: gate on the squared Mahalanobis distance of the ground-plane position (2 dof)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--tracker-yaw-gate", tracker->yaw_gate_deg,
+                      "Tracker: largest axis difference (yaw modulo 180 deg) of a detection to its track, deg")
+      ->capture_default_str();
+  command->add_option("--tracker-confirm-hits", tracker->confirm_hits,
+                      "Tracker: detections that confirm a new track")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--tracker-max-misses", tracker->max_misses,
+                      "Tracker: a confirmed track ends after more consecutive missed frames")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--tracker-max-join-gap", tracker->max_join_gap,
+                      "Tracker: fragments are joined across at most this many missed frames")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--tracker-join-gate", tracker->join_gate_chi2,
+                      "Tracker: largest link cost of a join (squared Mahalanobis units)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_flag("--tracker-join,!--no-tracker-join", tracker->join_fragments,
+                    "Tracker: join fragments whose constant-velocity fits agree")
+      ->capture_default_str();
+  command->add_flag("--tracker-swaps,!--no-tracker-swaps", tracker->resolve_switches,
+                    "Tracker: swap the tails of two tracks where that resolves an identity switch")
+      ->capture_default_str();
+  command->add_option("--frame-rate", tracker->frame_rate_hz, "Frames per second of the sequences")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+}
+
+}  // namespace
 
 void RegisterFitCommand(CLI::App* app) {
   auto options = std::make_shared<RunFitOptions>();
@@ -35,7 +111,8 @@ void RegisterFitCommand(CLI::App* app) {
   command->add_option("--out", o.output_dir, "Output directory (created)")->required();
   command->add_option("--tracks", o.tracking_labels,
                       "KITTI tracking label file giving the tracks (frame track_id ...); repeat once "
-                      "per --seq, in the same order. Without it detections/ are linked into tracks");
+                      "per --seq, in the same order: the way to plug in another tracker. Without it "
+                      "detections/ are linked into tracks by samp's tracker (--tracker-* options)");
   command->add_flag("--single-frame", o.fit.single_frame,
                     "Single-frame mode (GCPR 2016): a shape per frame, no motion term");
   command->add_option("--em-iterations", o.fit.em_iterations,
@@ -80,6 +157,7 @@ void RegisterFitCommand(CLI::App* app) {
                       "--single-frame)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  AddTrackerOptions(command, &o.sequence.tracker);
   command->add_flag_callback("--no-meshes", [options] { options->write_meshes = false; },
                     "Do not write meshes/ (PLY surfaces and aligned points)");
   command->add_flag("--pictures", visuals->pictures,
