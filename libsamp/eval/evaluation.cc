@@ -30,6 +30,7 @@
 #include "libsamp/model/shape_lookup.h"
 #include "libsamp/model/shape_model.h"
 #include "libsamp/data/stereo.h"
+#include "libsamp/data/tracking.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/scan/renderer.h"
 #include "libsamp/viz/image.h"
@@ -130,11 +131,24 @@ cv::Mat ReadPngOfType(const std::string& path, int type, const cv::Size& size) {
   return image;
 }
 
-// One method's view of one ground-truth car-frame.
+// The two matchings (docs/evaluation.md): per track, each true car gets one
+// output track for the whole sequence; per frame, each true car at each frame
+// gets the nearest output box of any track within per_frame_distance.
+constexpr int kPerTrack = 0, kPerFrame = 1, kNumMatchings = 2;
+const char* const kMatchingNames[kNumMatchings] = {"per track", "per frame"};
+const char* const kMatchingKeys[kNumMatchings] = {"per_track", "per_frame"};
+
+// One method's view of one ground-truth car-frame under one matching.
 struct MethodRecord {
   bool matched = false;
   bool has_shape = false;
+  int output_track = -1;
   double translation_error = 0.0, yaw_error_deg = 0.0;
+  // Offset of the estimated origin from the true one in the camera: along the
+  // horizontal viewing ray to the true origin (+ = farther), across it (+ =
+  // right), vertically (+ = lower, camera y).
+  double along_ray_offset = 0.0, lateral_offset = 0.0, vertical_offset = 0.0;
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();  // estimated h, w, l
   int num_estimated_points = 0;
   std::vector<ShapeScores> scores;  // per tau
 };
@@ -145,7 +159,8 @@ struct Record {
   double distance = 0.0;
   int segment_pixels = 0;
   int num_true_points = 0;
-  std::vector<MethodRecord> methods;
+  Eigen::Vector3d true_size = Eigen::Vector3d::Zero();  // h, w, l
+  std::vector<MethodRecord> methods[kNumMatchings];
 };
 
 struct MethodInfo {
@@ -303,7 +318,7 @@ std::vector<Eigen::Vector3d> RenderedPoints(const Mesh& mesh, const Eigen::Isome
 std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::string& directory,
                                      const std::vector<MethodInfo>& methods,
                                      std::vector<std::unique_ptr<ResultMeshes>>* result_meshes,
-                                     std::set<std::string>* tracks) {
+                                     std::set<std::string>* tracks, std::vector<TrackingCounts>* tracking) {
   const SequenceFiles files = ListSequence(directory);
   const std::string seq = files.name;
   const SequenceLayout layout(directory, seq);
@@ -351,24 +366,24 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
     }
   }
 
-  // Match per frame and collect the work.
-  struct Work {
-    Record record;
-    std::vector<cv::Point> pixels;
-    std::vector<const ObjectLabel*> matched;  // per method
+  // Per frame: the object map's segments and, per method, the IoU matches.
+  struct FrameData {
+    std::vector<std::vector<cv::Point>> segments;  // per truth
+    std::vector<std::vector<int>> iou_match;       // per method: per truth, the index of its label or -1
   };
-  std::vector<Work> work;
+  std::map<int, FrameData> frame_data;
   for (const auto& [frame, truths] : gt_by_frame) {
+    FrameData& fd = frame_data[frame];
     const cv::Mat object_map =
         ReadPngOfType(layout.GroundTruthObjectMap(frame), CV_8UC1, size);
     std::vector<Eigen::Vector4d> truth_boxes;
     for (const ObjectLabel& t : truths) truth_boxes.push_back(ProjectedBox(t, camera));
-    std::vector<std::vector<int>> matches(methods.size());
+    fd.iou_match.resize(methods.size());
     for (size_t m = 0; m < methods.size(); ++m) {
       if (methods[m].name == kStereo) continue;
       std::vector<Eigen::Vector4d> boxes;
       for (const ObjectLabel& e : labels[m][frame]) boxes.push_back(ProjectedBox(e, camera));
-      matches[m] = MatchBoxes(truth_boxes, boxes, options.min_iou);
+      fd.iou_match[m] = MatchBoxes(truth_boxes, boxes, options.min_iou);
     }
     std::vector<std::vector<cv::Point>> segments(256);
     for (int v = 0; v < object_map.rows; ++v) {
@@ -377,12 +392,93 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
         if (k > 0) segments[k].emplace_back(u, v);
       }
     }
-    for (size_t t = 0; t < truths.size(); ++t) {
-      const ObjectLabel& truth = truths[t];
+    for (const ObjectLabel& truth : truths) {
       SAMP_CHECK(truth.track_id >= 0 && truth.track_id < 255)
           << "eval: " << seq << " frame " << frame << ": ground-truth track id " << truth.track_id
           << " outside the object map's range 0..254";
-      const std::vector<cv::Point>& segment = segments[truth.track_id + 1];
+      fd.segments.push_back(std::move(segments[truth.track_id + 1]));
+    }
+  }
+
+  // Per-track matching: each true car gets the output track with which it
+  // shares the most IoU-matched frames (one-to-one, Hungarian on the overlap).
+  // A method without track ids (the detections) keeps the per-frame IoU match.
+  std::vector<std::map<int, int>> track_of_car(methods.size());  // method: true id -> output track
+  for (size_t m = 0; m < methods.size(); ++m) {
+    if (methods[m].name == kStereo || methods[m].name == kDetections) continue;
+    std::map<std::pair<int, int>, int> overlap;  // (true id, output track) -> frames
+    std::set<int> car_ids, track_ids;
+    for (const auto& [frame, truths] : gt_by_frame) {
+      for (size_t t = 0; t < truths.size(); ++t) {
+        const int e = frame_data[frame].iou_match[m][t];
+        if (e < 0) continue;
+        const int track = labels[m][frame][e].track_id;
+        ++overlap[{truths[t].track_id, track}];
+        car_ids.insert(truths[t].track_id);
+        track_ids.insert(track);
+      }
+    }
+    const std::vector<int> cars(car_ids.begin(), car_ids.end()), out_tracks(track_ids.begin(), track_ids.end());
+    int most = 0;
+    for (const auto& [pair, n] : overlap) most = std::max(most, n);
+    // Every pair allowed (cost most + 1 - overlap): the assignment maximises the total overlap.
+    std::vector<double> cost(cars.size() * out_tracks.size());
+    for (size_t i = 0; i < cars.size(); ++i)
+      for (size_t j = 0; j < out_tracks.size(); ++j) {
+        const auto found = overlap.find({cars[i], out_tracks[j]});
+        cost[i * out_tracks.size() + j] = most + 1 - (found == overlap.end() ? 0 : found->second);
+      }
+    const std::vector<int> assigned = SolveAssignment(cost, int(cars.size()), int(out_tracks.size()));
+    for (size_t i = 0; i < cars.size(); ++i) {
+      if (assigned[i] < 0 || !overlap.count({cars[i], out_tracks[assigned[i]]})) continue;
+      track_of_car[m][cars[i]] = out_tracks[assigned[i]];
+    }
+  }
+
+  // Per-frame matching (and the CLEAR-MOT counts): by the distance of the origins.
+  std::vector<std::map<int, std::vector<int>>> frame_match(methods.size());  // method: frame -> per truth
+  for (size_t m = 0; m < methods.size(); ++m) {
+    if (methods[m].name == kStereo) continue;
+    std::vector<TrackedBox> truth_boxes, output_boxes;
+    std::vector<std::pair<int, int>> output_index;  // (frame, index in labels[m][frame])
+    for (const auto& [frame, truths] : gt_by_frame) {
+      for (size_t t = 0; t < truths.size(); ++t) {
+        TrackedBox box;
+        box.frame = frame;
+        box.track_id = truths[t].track_id;
+        box.position = truths[t].position;
+        box.ignore = int(frame_data[frame].segments[t].size()) < options.min_segment_pixels;
+        truth_boxes.push_back(box);
+      }
+      const std::vector<ObjectLabel>& estimates = labels[m][frame];
+      for (size_t e = 0; e < estimates.size(); ++e) {
+        output_boxes.push_back(TrackedBox{frame, estimates[e].track_id, estimates[e].position, false});
+        output_index.push_back({frame, int(e)});
+      }
+    }
+    const bool tracked = methods[m].name != kDetections;
+    const std::vector<int> match = MatchTracks(truth_boxes, output_boxes, options.per_frame_distance,
+                                               tracked ? &(*tracking)[m] : nullptr);
+    size_t i = 0;
+    for (const auto& [frame, truths] : gt_by_frame) {
+      std::vector<int>& per_truth = frame_match[m][frame];
+      for (size_t t = 0; t < truths.size(); ++t, ++i)
+        per_truth.push_back(match[i] < 0 ? -1 : output_index[match[i]].second);
+    }
+  }
+
+  // The evaluated car-frames.
+  struct Work {
+    Record record;
+    std::vector<cv::Point> pixels;
+    std::vector<const ObjectLabel*> matched[kNumMatchings];  // per method
+  };
+  std::vector<Work> work;
+  for (const auto& [frame, truths] : gt_by_frame) {
+    FrameData& fd = frame_data[frame];
+    for (size_t t = 0; t < truths.size(); ++t) {
+      const ObjectLabel& truth = truths[t];
+      std::vector<cv::Point>& segment = fd.segments[t];
       if (int(segment.size()) < options.min_segment_pixels) continue;
       Work w;
       w.record.sequence = seq;
@@ -390,22 +486,42 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
       w.record.frame = frame;
       w.record.distance = truth.position.norm();
       w.record.segment_pixels = int(segment.size());
-      w.record.methods.resize(methods.size());
-      w.pixels = segment;
-      w.matched.assign(methods.size(), nullptr);
+      w.record.true_size = Eigen::Vector3d(truth.height, truth.width, truth.length);
+      w.pixels = std::move(segment);
+      for (int k = 0; k < kNumMatchings; ++k) {
+        w.record.methods[k].resize(methods.size());
+        w.matched[k].assign(methods.size(), nullptr);
+      }
       for (size_t m = 0; m < methods.size(); ++m) {
         if (methods[m].name == kStereo) {
-          w.record.methods[m].matched = true;
+          for (int k = 0; k < kNumMatchings; ++k) w.record.methods[k][m].matched = true;
           continue;
         }
-        if (matches[m][t] < 0) continue;
-        const ObjectLabel& e = labels[m][frame][matches[m][t]];
-        w.matched[m] = &e;
-        MethodRecord& r = w.record.methods[m];
-        r.matched = true;
-        r.translation_error = (e.position - truth.position).norm();
-        r.yaw_error_deg = YawErrorDeg(e.rotation_y, truth.rotation_y);
-        if (methods[m].shape) (*result_meshes)[m]->Load(seq, e.track_id, frame);
+        int index[kNumMatchings] = {fd.iou_match[m][t], frame_match[m][frame][t]};
+        if (methods[m].name != kDetections && index[kPerTrack] >= 0) {
+          const auto assigned = track_of_car[m].find(truth.track_id);
+          if (assigned == track_of_car[m].end() ||
+              labels[m][frame][index[kPerTrack]].track_id != assigned->second)
+            index[kPerTrack] = -1;
+        }
+        for (int k = 0; k < kNumMatchings; ++k) {
+          if (index[k] < 0) continue;
+          const ObjectLabel& e = labels[m][frame][index[k]];
+          w.matched[k][m] = &e;
+          MethodRecord& r = w.record.methods[k][m];
+          r.matched = true;
+          r.output_track = e.track_id;
+          r.translation_error = (e.position - truth.position).norm();
+          r.yaw_error_deg = YawErrorDeg(e.rotation_y, truth.rotation_y);
+          Eigen::Vector3d ray(truth.position.x(), 0.0, truth.position.z());
+          ray = ray.norm() > 1e-9 ? Eigen::Vector3d(ray.normalized()) : Eigen::Vector3d::UnitZ();
+          const Eigen::Vector3d error = e.position - truth.position;
+          r.along_ray_offset = error.dot(ray);
+          r.lateral_offset = error.dot(Eigen::Vector3d(ray.z(), 0.0, -ray.x()));
+          r.vertical_offset = error.y();
+          r.size = Eigen::Vector3d(e.height, e.width, e.length);
+          if (methods[m].shape) (*result_meshes)[m]->Load(seq, e.track_id, frame);
+        }
       }
       tracks->insert(seq + "/" + std::to_string(truth.track_id));
       work.push_back(std::move(w));
@@ -435,24 +551,33 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
     const std::vector<Eigen::Vector3d> truth = BackProjectDepth(depths.at(w.record.frame), w.pixels, camera);
     w.record.num_true_points = int(truth.size());
     for (size_t m = 0; m < methods.size(); ++m) {
-      MethodRecord& r = w.record.methods[m];
-      if (!methods[m].shape || !r.matched) continue;
-      std::vector<Eigen::Vector3d> estimated;
-      if (methods[m].name == kStereo) {
-        const cv::Mat& disparity = disparities.at(w.record.frame);
-        for (const cv::Point& p : w.pixels) {
-          const float d = disparity.at<float>(p);
-          if (d > 0.f) estimated.push_back(DisparityToPoint(p.x, p.y, d, calibration));
+      for (int k = 0; k < kNumMatchings; ++k) {
+        MethodRecord& r = w.record.methods[k][m];
+        if (!methods[m].shape || !r.matched) continue;
+        if (k == kPerFrame && w.matched[kPerTrack][m] == w.matched[kPerFrame][m] &&
+            w.record.methods[kPerTrack][m].has_shape) {  // the same box: same scores
+          r.num_estimated_points = w.record.methods[kPerTrack][m].num_estimated_points;
+          r.scores = w.record.methods[kPerTrack][m].scores;
+          r.has_shape = true;
+          continue;
         }
-      } else {
-        const ObjectLabel& e = *w.matched[m];
-        const Mesh& mesh = (*result_meshes)[m]->Get(seq, e.track_id, w.record.frame);
-        estimated = RenderedPoints(mesh, CameraFromObject(e), w.pixels, camera);
+        std::vector<Eigen::Vector3d> estimated;
+        if (methods[m].name == kStereo) {
+          const cv::Mat& disparity = disparities.at(w.record.frame);
+          for (const cv::Point& p : w.pixels) {
+            const float d = disparity.at<float>(p);
+            if (d > 0.f) estimated.push_back(DisparityToPoint(p.x, p.y, d, calibration));
+          }
+        } else {
+          const ObjectLabel& e = *w.matched[k][m];
+          const Mesh& mesh = (*result_meshes)[m]->Get(seq, e.track_id, w.record.frame);
+          estimated = RenderedPoints(mesh, CameraFromObject(e), w.pixels, camera);
+        }
+        r.num_estimated_points = int(estimated.size());
+        const ShapeComparison comparison = CompareShapes(estimated, truth, max_tau);
+        for (double tau : options.taus) r.scores.push_back(comparison.At(tau));
+        r.has_shape = true;
       }
-      r.num_estimated_points = int(estimated.size());
-      const ShapeComparison comparison = CompareShapes(estimated, truth, max_tau);
-      for (double tau : options.taus) r.scores.push_back(comparison.At(tau));
-      r.has_shape = true;
     }
   });
   std::vector<Record> records;
@@ -571,6 +696,7 @@ void EvalOptions::Check() const {
   SAMP_CHECK(distance_window > 0) << "eval: distance_window must be > 0";
   SAMP_CHECK(min_segment_pixels >= 1) << "eval: min_segment_pixels must be >= 1";
   SAMP_CHECK(min_iou > 0 && min_iou <= 1) << "eval: min_iou must be in (0, 1]";
+  SAMP_CHECK(per_frame_distance > 0) << "eval: per_frame_distance must be > 0";
   SAMP_CHECK(num_threads >= 0) << "eval: num_threads must be >= 0";
 }
 
@@ -584,6 +710,7 @@ std::string EvalOptions::ToJson() const {
                             {"distance_window", distance_window},
                             {"min_segment_pixels", min_segment_pixels},
                             {"min_iou", min_iou},
+                            {"per_frame_distance", per_frame_distance},
                             {"stereo_baseline", stereo_baseline},
                             {"detection_baseline", detection_baseline}};
   return DumpJson(j, 2);
@@ -601,9 +728,17 @@ std::string EvalSummary::BriefReport() const {
     if (s.f1.empty()) continue;
     out << "; " << s.method << " F1@" << Fixed(headline_tau, 2) << " " << Fixed(100.0 * s.f1[headline], 2) << "%";
   }
+  for (const MethodShapeResult& s : shape_per_frame) {
+    if (s.f1.empty() || s.method == "stereo") continue;
+    out << "; " << s.method << " per frame " << Fixed(100.0 * s.f1[headline], 2) << "%";
+  }
   for (const MethodPoseResult& p : pose) {
     out << "; " << p.method << " median " << Fixed(p.all.translation_median, 2) << " m / "
         << Fixed(p.all.yaw_median_deg, 1) << " deg";
+  }
+  for (const MethodTrackingResult& t : tracking) {
+    out << "; " << t.method << " " << Fixed(t.counts.TracksPerCar(), 2) << " tracks/car, IDSW "
+        << t.counts.id_switches << ", MOTA " << Fixed(100 * t.counts.Mota(), 1) << "%";
   }
   out << " (" << Fixed(seconds, 1) << " s)";
   return out.str();
@@ -624,6 +759,7 @@ EvalSummary Evaluate(const EvalOptions& options) {
 
   std::vector<Record> records;
   std::set<std::string> tracks;
+  std::vector<TrackingCounts> tracking(methods.size());
   Progress progress("eval sequences", int64_t(options.sequences.size()));
   for (const std::string& sequence : options.sequences) {
     std::vector<std::unique_ptr<ResultMeshes>> result_meshes(methods.size());
@@ -632,7 +768,7 @@ EvalSummary Evaluate(const EvalOptions& options) {
       const std::string folder = ResultFolder(methods[m].folder, ListSequence(sequence).name);
       if (!folder.empty()) result_meshes[m] = std::make_unique<ResultMeshes>(folder);
     }
-    std::vector<Record> r = EvaluateSequence(options, sequence, methods, &result_meshes, &tracks);
+    std::vector<Record> r = EvaluateSequence(options, sequence, methods, &result_meshes, &tracks, &tracking);
     records.insert(records.end(), std::make_move_iterator(r.begin()), std::make_move_iterator(r.end()));
     progress.Tick();
   }
@@ -649,107 +785,190 @@ EvalSummary Evaluate(const EvalOptions& options) {
     if (std::abs(options.taus[i] - options.headline_tau) < 1e-9) headline = i;
   }
 
-  // Shape over the common set.
-  auto in_common = [&](const Record& r, bool shape) {
-    for (size_t m = 0; m < methods.size(); ++m) {
-      if ((shape ? methods[m].shape : methods[m].pose) && !r.methods[m].matched) return false;
-    }
-    return true;
-  };
-  for (size_t m = 0; m < methods.size(); ++m) {
-    if (!methods[m].shape) continue;
-    MethodShapeResult s;
-    s.method = methods[m].name;
-    s.accuracy.assign(options.taus.size(), 0.0);
-    s.completeness.assign(options.taus.size(), 0.0);
-    s.f1.assign(options.taus.size(), 0.0);
-    for (const Record& r : records) {
-      if (r.methods[m].matched) ++s.num_matched;
-      if (!in_common(r, true)) continue;
-      ++s.num_evaluated;
-      for (size_t i = 0; i < options.taus.size(); ++i) {
-        s.accuracy[i] += r.methods[m].scores[i].accuracy;
-        s.completeness[i] += r.methods[m].scores[i].completeness;
-        s.f1[i] += r.methods[m].scores[i].f1;
-      }
-    }
-    for (size_t i = 0; i < options.taus.size(); ++i) {
-      const double n = std::max(1, s.num_evaluated);
-      s.accuracy[i] /= n, s.completeness[i] /= n, s.f1[i] /= n;
-    }
-    summary.shape.push_back(s);
-  }
-  // Pose over the common set, in distance windows.
   double max_distance = 0.0;
   for (const Record& r : records) max_distance = std::max(max_distance, r.distance);
   const int num_windows = std::max(1, int(std::ceil(max_distance / options.distance_window)));
+  for (int k = 0; k < kNumMatchings; ++k) {
+    std::vector<MethodShapeResult>& shape_results = k == kPerTrack ? summary.shape : summary.shape_per_frame;
+    std::vector<MethodPoseResult>& pose_results = k == kPerTrack ? summary.pose : summary.pose_per_frame;
+    // Shape over the common set.
+    auto in_common = [&](const Record& r, bool shape) {
+      for (size_t m = 0; m < methods.size(); ++m) {
+        if ((shape ? methods[m].shape : methods[m].pose) && !r.methods[k][m].matched) return false;
+      }
+      return true;
+    };
+    for (size_t m = 0; m < methods.size(); ++m) {
+      if (!methods[m].shape) continue;
+      MethodShapeResult s;
+      s.method = methods[m].name;
+      s.accuracy.assign(options.taus.size(), 0.0);
+      s.completeness.assign(options.taus.size(), 0.0);
+      s.f1.assign(options.taus.size(), 0.0);
+      for (const Record& r : records) {
+        if (r.methods[k][m].matched) ++s.num_matched;
+        if (!in_common(r, true)) continue;
+        ++s.num_evaluated;
+        for (size_t i = 0; i < options.taus.size(); ++i) {
+          s.accuracy[i] += r.methods[k][m].scores[i].accuracy;
+          s.completeness[i] += r.methods[k][m].scores[i].completeness;
+          s.f1[i] += r.methods[k][m].scores[i].f1;
+        }
+      }
+      for (size_t i = 0; i < options.taus.size(); ++i) {
+        const double n = std::max(1, s.num_evaluated);
+        s.accuracy[i] /= n, s.completeness[i] /= n, s.f1[i] /= n;
+      }
+      shape_results.push_back(s);
+    }
+    // Pose over the common set, in distance windows.
+    for (size_t m = 0; m < methods.size(); ++m) {
+      if (!methods[m].pose) continue;
+      MethodPoseResult p;
+      p.method = methods[m].name;
+      std::vector<std::vector<double>> translation(num_windows), yaw(num_windows);
+      std::vector<double> all_translation, all_yaw, far_translation, far_yaw;
+      for (const Record& r : records) {
+        const MethodRecord& mr = r.methods[k][m];
+        if (mr.matched) ++p.num_matched;
+        if (!in_common(r, false)) continue;
+        const int w = std::min(num_windows - 1, int(r.distance / options.distance_window));
+        translation[w].push_back(mr.translation_error);
+        yaw[w].push_back(mr.yaw_error_deg);
+        all_translation.push_back(mr.translation_error);
+        all_yaw.push_back(mr.yaw_error_deg);
+        if (w > 0) {
+          far_translation.push_back(mr.translation_error);
+          far_yaw.push_back(mr.yaw_error_deg);
+        }
+      }
+      for (int w = 0; w < num_windows; ++w) {
+        p.windows.push_back(MakeWindow(w * options.distance_window, (w + 1) * options.distance_window,
+                                       translation[w], yaw[w]));
+      }
+      p.all = MakeWindow(0.0, num_windows * options.distance_window, all_translation, all_yaw);
+      p.beyond_first = MakeWindow(options.distance_window, num_windows * options.distance_window,
+                                  far_translation, far_yaw);
+      pose_results.push_back(p);
+    }
+  }
+  // Tracking figures of the results (not of the baselines).
+  for (size_t m = 0; m < methods.size(); ++m) {
+    if (methods[m].name == kStereo || methods[m].name == kDetections) continue;
+    summary.tracking.push_back({methods[m].name, tracking[m]});
+  }
+  // Per-car diagnostics by distance band (per-frame matching: every matched car-frame of the method).
   for (size_t m = 0; m < methods.size(); ++m) {
     if (!methods[m].pose) continue;
-    MethodPoseResult p;
-    p.method = methods[m].name;
-    std::vector<std::vector<double>> translation(num_windows), yaw(num_windows);
-    std::vector<double> all_translation, all_yaw, far_translation, far_yaw;
-    for (const Record& r : records) {
-      if (r.methods[m].matched) ++p.num_matched;
-      if (!in_common(r, false)) continue;
-      const int w = std::min(num_windows - 1, int(r.distance / options.distance_window));
-      translation[w].push_back(r.methods[m].translation_error);
-      yaw[w].push_back(r.methods[m].yaw_error_deg);
-      all_translation.push_back(r.methods[m].translation_error);
-      all_yaw.push_back(r.methods[m].yaw_error_deg);
-      if (w > 0) {
-        far_translation.push_back(r.methods[m].translation_error);
-        far_yaw.push_back(r.methods[m].yaw_error_deg);
+    for (int w = 0; w <= num_windows; ++w) {  // the last one: all distances
+      DiagnosticsBand band;
+      band.method = methods[m].name;
+      band.min_distance = w < num_windows ? w * options.distance_window : 0.0;
+      band.max_distance = w < num_windows ? (w + 1) * options.distance_window : num_windows * options.distance_window;
+      std::vector<double> along, lateral, vertical, dh, dw, dl, f1;
+      for (const Record& r : records) {
+        const MethodRecord& mr = r.methods[kPerFrame][m];
+        if (!mr.matched) continue;
+        if (w < num_windows && std::min(num_windows - 1, int(r.distance / options.distance_window)) != w) continue;
+        along.push_back(mr.along_ray_offset);
+        lateral.push_back(std::abs(mr.lateral_offset));
+        vertical.push_back(std::abs(mr.vertical_offset));
+        dh.push_back(mr.size[0] - r.true_size[0]);
+        dw.push_back(mr.size[1] - r.true_size[1]);
+        dl.push_back(mr.size[2] - r.true_size[2]);
+        if (mr.has_shape) f1.push_back(mr.scores[headline].f1);
       }
+      band.count = int(along.size());
+      band.along_ray_offset = Median(along);
+      band.abs_lateral_offset = Median(lateral);
+      band.abs_vertical_offset = Median(vertical);
+      band.size_error = Eigen::Vector3d(Median(dh), Median(dw), Median(dl));
+      band.f1 = Median(f1);
+      band.num_shape = int(f1.size());
+      summary.diagnostics.push_back(band);
     }
-    for (int w = 0; w < num_windows; ++w) {
-      p.windows.push_back(MakeWindow(w * options.distance_window, (w + 1) * options.distance_window,
-                                     translation[w], yaw[w]));
-    }
-    p.all = MakeWindow(0.0, num_windows * options.distance_window, all_translation, all_yaw);
-    p.beyond_first = MakeWindow(options.distance_window, num_windows * options.distance_window,
-                                far_translation, far_yaw);
-    summary.pose.push_back(p);
   }
 
   // Tables.
   std::ostringstream md;
   const std::string tau = Fixed(options.headline_tau, 2);
-  md << "### Shape at tau = " << tau << " m\n\n";
-  const int common_shape = summary.shape.empty() ? 0 : summary.shape[0].num_evaluated;
-  md << common_shape << " car-frames matched by every method (of " << records.size()
-     << " with >= " << options.min_segment_pixels << " visible pixels, " << tracks.size()
-     << " tracks, " << options.sequences.size() << " sequences).\n\n";
-  md << "| Method | Accuracy [%] | Completeness [%] | F1 [%] | Matched car-frames |\n";
-  md << "|---|---:|---:|---:|---:|\n";
-  for (const MethodShapeResult& s : summary.shape) {
-    md << "| " << s.method << " | " << Fixed(100 * s.accuracy[headline], 2) << " | "
-       << Fixed(100 * s.completeness[headline], 2) << " | " << Fixed(100 * s.f1[headline], 2) << " | "
-       << s.num_matched << " / " << records.size() << " |\n";
-  }
-  md << "\n### F1 [%] over tau\n\n| Method |";
-  for (double t : options.taus) md << " " << Fixed(t, 2) << " |";
-  md << "\n|---|";
-  for (size_t i = 0; i < options.taus.size(); ++i) md << "---:|";
-  md << "\n";
-  for (const MethodShapeResult& s : summary.shape) {
-    md << "| " << s.method << " |";
-    for (double v : s.f1) md << " " << Fixed(100 * v, 2) << " |";
+  for (int k = 0; k < kNumMatchings; ++k) {
+    const std::vector<MethodShapeResult>& shape_results = k == kPerTrack ? summary.shape : summary.shape_per_frame;
+    const std::vector<MethodPoseResult>& pose_results = k == kPerTrack ? summary.pose : summary.pose_per_frame;
+    const std::string matching = std::string(" (") + kMatchingNames[k] + " matching)";
+    md << "### Shape at tau = " << tau << " m" << matching << "\n\n";
+    const int common_shape = shape_results.empty() ? 0 : shape_results[0].num_evaluated;
+    md << common_shape << " car-frames matched by every method (of " << records.size()
+       << " with >= " << options.min_segment_pixels << " visible pixels, " << tracks.size()
+       << " tracks, " << options.sequences.size() << " sequences).";
+    md << (k == kPerTrack ? " Each true car is matched to one output track (the one sharing most IoU-matched "
+                            "frames with it): a fragmented or swapped track costs.\n\n"
+                          : " Each true car-frame is matched to the nearest box of any track within " +
+                                Fixed(options.per_frame_distance, 1) + " m: abstracts from tracking errors.\n\n");
+    md << "| Method | Accuracy [%] | Completeness [%] | F1 [%] | Matched car-frames |\n";
+    md << "|---|---:|---:|---:|---:|\n";
+    for (const MethodShapeResult& s : shape_results) {
+      md << "| " << s.method << " | " << Fixed(100 * s.accuracy[headline], 2) << " | "
+         << Fixed(100 * s.completeness[headline], 2) << " | " << Fixed(100 * s.f1[headline], 2) << " | "
+         << s.num_matched << " / " << records.size() << " |\n";
+    }
+    md << "\n### F1 [%] over tau" << matching << "\n\n| Method |";
+    for (double t : options.taus) md << " " << Fixed(t, 2) << " |";
+    md << "\n|---|";
+    for (size_t i = 0; i < options.taus.size(); ++i) md << "---:|";
+    md << "\n";
+    for (const MethodShapeResult& s : shape_results) {
+      md << "| " << s.method << " |";
+      for (double v : s.f1) md << " " << Fixed(100 * v, 2) << " |";
+      md << "\n";
+    }
+    md << "\n### Pose" << matching << "\n\n";
+    const int common_pose = pose_results.empty() ? 0 : pose_results[0].all.count;
+    md << common_pose << " car-frames matched by every method. Translation error of the object "
+       << "origin (m), absolute yaw error (deg, 180-degree flips count fully).\n\n";
+    md << "| Method | Distance | n | Transl. mean | Transl. median | Yaw mean | Yaw median |\n";
+    md << "|---|---|---:|---:|---:|---:|---:|\n";
+    for (const MethodPoseResult& p : pose_results) {
+      for (const auto& [name, w] : PoseRows(p)) {
+        md << "| " << p.method << " | " << name
+           << " | " << w.count << " | " << Fixed(w.translation_mean, 3) << " | "
+           << Fixed(w.translation_median, 3) << " | " << Fixed(w.yaw_mean_deg, 2) << " | "
+           << Fixed(w.yaw_median_deg, 2) << " |\n";
+      }
+    }
     md << "\n";
   }
-  md << "\n### Pose\n\n";
-  const int common_pose = summary.pose.empty() ? 0 : summary.pose[0].all.count;
-  md << common_pose << " car-frames matched by every method. Translation error of the object "
-     << "origin (m), absolute yaw error (deg, 180-degree flips count fully).\n\n";
-  md << "| Method | Distance | n | Transl. mean | Transl. median | Yaw mean | Yaw median |\n";
-  md << "|---|---|---:|---:|---:|---:|---:|\n";
-  for (const MethodPoseResult& p : summary.pose) {
-    for (const auto& [name, w] : PoseRows(p)) {
-      md << "| " << p.method << " | " << name
-         << " | " << w.count << " | " << Fixed(w.translation_mean, 3) << " | "
-         << Fixed(w.translation_median, 3) << " | " << Fixed(w.yaw_mean_deg, 2) << " | "
-         << Fixed(w.yaw_median_deg, 2) << " |\n";
+  if (!summary.tracking.empty()) {
+    md << "### Tracking (CLEAR-MOT, per-frame matching within " << Fixed(options.per_frame_distance, 1)
+       << " m)\n\n";
+    md << "| Method | True cars | Output tracks | Tracks per car | Main track [%] | IDSW | FRAG | Missed cars "
+          "| False tracks | FN | FP | MOTA [%] | MOTP [m] |\n";
+    md << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const MethodTrackingResult& t : summary.tracking) {
+      const TrackingCounts& c = t.counts;
+      md << "| " << t.method << " | " << c.true_cars << " | " << c.output_tracks << " | "
+         << Fixed(c.TracksPerCar(), 2) << " | " << Fixed(100 * c.MainTrackShare(), 1) << " | " << c.id_switches
+         << " | " << c.fragmentations << " | " << c.missed_cars << " | " << c.false_tracks << " | " << c.misses
+         << " | " << c.false_positives << " | " << Fixed(100 * c.Mota(), 1) << " | " << Fixed(c.Motp(), 3)
+         << " |\n";
     }
+    md << "\n";
+  }
+  md << "### Per-car diagnostics (per-frame matching, medians)\n\n"
+     << "Offset of the estimated origin from the true one along the viewing ray (+ = farther), |across| and "
+        "|vertical|; estimated minus true box size; F1 at tau = "
+     << tau << " m. Every car-frame the method matched (per_car.csv has them all).\n\n";
+  md << "| Method | Distance | n | Along ray [m] | Across [m] | Vertical [m] | dh [m] | dw [m] | dl [m] | F1 [%] |\n";
+  md << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const DiagnosticsBand& b : summary.diagnostics) {
+    const bool all = b.min_distance == 0.0 && b.max_distance == num_windows * options.distance_window &&
+                     num_windows > 1;
+    md << "| " << b.method << " | "
+       << (all ? std::string("all") : Fixed(b.min_distance, 0) + "-" + Fixed(b.max_distance, 0) + " m") << " | "
+       << b.count << " | " << Fixed(b.along_ray_offset, 3) << " | " << Fixed(b.abs_lateral_offset, 3) << " | "
+       << Fixed(b.abs_vertical_offset, 3) << " | " << Fixed(b.size_error[0], 3) << " | "
+       << Fixed(b.size_error[1], 3) << " | " << Fixed(b.size_error[2], 3) << " | "
+       << (b.num_shape > 0 ? Fixed(100 * b.f1, 2) : std::string("-")) << " |\n";
   }
   summary.markdown = md.str();
 
@@ -758,76 +977,144 @@ EvalSummary Evaluate(const EvalOptions& options) {
   fs::create_directories(out);
   WriteTextFileAtomically((out / "results.md").string(), summary.markdown);
   std::ostringstream shape_csv;
-  shape_csv << "method,tau,accuracy,completeness,f1,car_frames\n";
-  for (const MethodShapeResult& s : summary.shape) {
-    for (size_t i = 0; i < options.taus.size(); ++i) {
-      shape_csv << s.method << "," << options.taus[i] << "," << Fixed(s.accuracy[i], 6) << ","
-                << Fixed(s.completeness[i], 6) << "," << Fixed(s.f1[i], 6) << "," << s.num_evaluated << "\n";
+  shape_csv << "method,matching,tau,accuracy,completeness,f1,car_frames\n";
+  for (int k = 0; k < kNumMatchings; ++k) {
+    for (const MethodShapeResult& s : k == kPerTrack ? summary.shape : summary.shape_per_frame) {
+      for (size_t i = 0; i < options.taus.size(); ++i) {
+        shape_csv << s.method << "," << kMatchingKeys[k] << "," << options.taus[i] << "," << Fixed(s.accuracy[i], 6)
+                  << "," << Fixed(s.completeness[i], 6) << "," << Fixed(s.f1[i], 6) << "," << s.num_evaluated
+                  << "\n";
+      }
     }
   }
   WriteTextFileAtomically((out / "shape.csv").string(), shape_csv.str());
   std::ostringstream pose_csv;
-  pose_csv << "method,window,min_distance,max_distance,count,translation_mean,translation_median,yaw_mean_deg,yaw_median_deg\n";
-  for (const MethodPoseResult& p : summary.pose) {
-    for (const auto& [name, w] : PoseRows(p)) {
-      pose_csv << p.method << "," << name << "," << w.min_distance << "," << w.max_distance << "," << w.count << ","
-               << Fixed(w.translation_mean, 6) << "," << Fixed(w.translation_median, 6) << ","
-               << Fixed(w.yaw_mean_deg, 6) << "," << Fixed(w.yaw_median_deg, 6) << "\n";
+  pose_csv << "method,matching,window,min_distance,max_distance,count,translation_mean,translation_median,"
+              "yaw_mean_deg,yaw_median_deg\n";
+  for (int k = 0; k < kNumMatchings; ++k) {
+    for (const MethodPoseResult& p : k == kPerTrack ? summary.pose : summary.pose_per_frame) {
+      for (const auto& [name, w] : PoseRows(p)) {
+        pose_csv << p.method << "," << kMatchingKeys[k] << "," << name << "," << w.min_distance << ","
+                 << w.max_distance << "," << w.count << "," << Fixed(w.translation_mean, 6) << ","
+                 << Fixed(w.translation_median, 6) << "," << Fixed(w.yaw_mean_deg, 6) << ","
+                 << Fixed(w.yaw_median_deg, 6) << "\n";
+      }
     }
   }
   WriteTextFileAtomically((out / "pose.csv").string(), pose_csv.str());
   std::ostringstream object_csv;
-  object_csv << "sequence,track_id,frame,distance,segment_pixels,true_points,method,matched,"
+  object_csv << "sequence,track_id,frame,distance,segment_pixels,true_points,method,matching,matched,"
                 "translation_error,yaw_error_deg,estimated_points,accuracy,completeness,f1\n";
-  nlohmann::json per_object = nlohmann::json::array();
+  std::ostringstream car_csv;
+  car_csv << "sequence,track_id,frame,distance,method,matching,output_track,along_ray_offset,lateral_offset,"
+             "vertical_offset,h,w,l,true_h,true_w,true_l,translation_error,yaw_error_deg,f1\n";
   for (const Record& r : records) {
-    for (size_t m = 0; m < methods.size(); ++m) {
-      const MethodRecord& mr = r.methods[m];
-      object_csv << r.sequence << "," << r.track_id << "," << r.frame << "," << Fixed(r.distance, 3) << ","
-                 << r.segment_pixels << "," << r.num_true_points << "," << methods[m].name << ","
-                 << (mr.matched ? 1 : 0) << ",";
-      if (mr.matched && methods[m].pose) {
-        object_csv << Fixed(mr.translation_error, 4) << "," << Fixed(mr.yaw_error_deg, 3);
-      } else {
-        object_csv << ",";
+    for (int k = 0; k < kNumMatchings; ++k) {
+      for (size_t m = 0; m < methods.size(); ++m) {
+        const MethodRecord& mr = r.methods[k][m];
+        object_csv << r.sequence << "," << r.track_id << "," << r.frame << "," << Fixed(r.distance, 3) << ","
+                   << r.segment_pixels << "," << r.num_true_points << "," << methods[m].name << ","
+                   << kMatchingKeys[k] << "," << (mr.matched ? 1 : 0) << ",";
+        if (mr.matched && methods[m].pose) {
+          object_csv << Fixed(mr.translation_error, 4) << "," << Fixed(mr.yaw_error_deg, 3);
+        } else {
+          object_csv << ",";
+        }
+        object_csv << "," << mr.num_estimated_points << ",";
+        if (mr.has_shape) {
+          const ShapeScores& s = mr.scores[headline];
+          object_csv << Fixed(s.accuracy, 4) << "," << Fixed(s.completeness, 4) << "," << Fixed(s.f1, 4);
+        } else {
+          object_csv << ",,";
+        }
+        object_csv << "\n";
+        if (!mr.matched || !methods[m].pose) continue;
+        car_csv << r.sequence << "," << r.track_id << "," << r.frame << "," << Fixed(r.distance, 3) << ","
+                << methods[m].name << "," << kMatchingKeys[k] << "," << mr.output_track << ","
+                << Fixed(mr.along_ray_offset, 4) << "," << Fixed(mr.lateral_offset, 4) << ","
+                << Fixed(mr.vertical_offset, 4) << "," << Fixed(mr.size[0], 3) << "," << Fixed(mr.size[1], 3) << ","
+                << Fixed(mr.size[2], 3) << "," << Fixed(r.true_size[0], 3) << "," << Fixed(r.true_size[1], 3) << ","
+                << Fixed(r.true_size[2], 3) << "," << Fixed(mr.translation_error, 4) << ","
+                << Fixed(mr.yaw_error_deg, 3) << "," << (mr.has_shape ? Fixed(mr.scores[headline].f1, 4) : "")
+                << "\n";
       }
-      object_csv << "," << mr.num_estimated_points << ",";
-      if (mr.has_shape) {
-        const ShapeScores& s = mr.scores[headline];
-        object_csv << Fixed(s.accuracy, 4) << "," << Fixed(s.completeness, 4) << "," << Fixed(s.f1, 4);
-      } else {
-        object_csv << ",,";
-      }
-      object_csv << "\n";
     }
   }
   WriteTextFileAtomically((out / "per_object.csv").string(), object_csv.str());
+  WriteTextFileAtomically((out / "per_car.csv").string(), car_csv.str());
+  std::ostringstream tracking_csv;
+  tracking_csv << "method,true_cars,true_boxes,output_tracks,output_boxes,matches,tracks_per_car,main_track_share,"
+                  "id_switches,fragmentations,missed_cars,false_tracks,misses,false_positives,mota,motp\n";
+  for (const MethodTrackingResult& t : summary.tracking) {
+    const TrackingCounts& c = t.counts;
+    tracking_csv << t.method << "," << c.true_cars << "," << c.true_boxes << "," << c.output_tracks << ","
+                 << c.output_boxes << "," << c.matches << "," << Fixed(c.TracksPerCar(), 4) << ","
+                 << Fixed(c.MainTrackShare(), 4) << "," << c.id_switches << "," << c.fragmentations << ","
+                 << c.missed_cars << "," << c.false_tracks << "," << c.misses << "," << c.false_positives << ","
+                 << Fixed(c.Mota(), 4) << "," << Fixed(c.Motp(), 4) << "\n";
+  }
+  WriteTextFileAtomically((out / "tracking.csv").string(), tracking_csv.str());
+
   nlohmann::json j;
   j["options"] = nlohmann::json::parse(options.ToJson());
   j["num_car_frames"] = records.size();
   j["num_tracks"] = tracks.size();
-  for (const MethodShapeResult& s : summary.shape) {
-    j["shape"].push_back({{"method", s.method},
-                          {"taus", options.taus},
-                          {"accuracy", s.accuracy},
-                          {"completeness", s.completeness},
-                          {"f1", s.f1},
-                          {"car_frames", s.num_evaluated},
-                          {"matched", s.num_matched}});
-  }
-  for (const MethodPoseResult& p : summary.pose) {
-    nlohmann::json windows = nlohmann::json::array();
-    for (const auto& [name, w] : PoseRows(p)) {
-      windows.push_back({{"window", name},
-                         {"min_distance", w.min_distance},
-                         {"max_distance", w.max_distance},
-                         {"count", w.count},
-                         {"translation_mean", w.translation_mean},
-                         {"translation_median", w.translation_median},
-                         {"yaw_mean_deg", w.yaw_mean_deg},
-                         {"yaw_median_deg", w.yaw_median_deg}});
+  for (int k = 0; k < kNumMatchings; ++k) {
+    const std::string suffix = k == kPerTrack ? "" : "_per_frame";
+    for (const MethodShapeResult& s : k == kPerTrack ? summary.shape : summary.shape_per_frame) {
+      j["shape" + suffix].push_back({{"method", s.method},
+                                     {"taus", options.taus},
+                                     {"accuracy", s.accuracy},
+                                     {"completeness", s.completeness},
+                                     {"f1", s.f1},
+                                     {"car_frames", s.num_evaluated},
+                                     {"matched", s.num_matched}});
     }
-    j["pose"].push_back({{"method", p.method}, {"windows", windows}, {"matched", p.num_matched}});
+    for (const MethodPoseResult& p : k == kPerTrack ? summary.pose : summary.pose_per_frame) {
+      nlohmann::json windows = nlohmann::json::array();
+      for (const auto& [name, w] : PoseRows(p)) {
+        windows.push_back({{"window", name},
+                           {"min_distance", w.min_distance},
+                           {"max_distance", w.max_distance},
+                           {"count", w.count},
+                           {"translation_mean", w.translation_mean},
+                           {"translation_median", w.translation_median},
+                           {"yaw_mean_deg", w.yaw_mean_deg},
+                           {"yaw_median_deg", w.yaw_median_deg}});
+      }
+      j["pose" + suffix].push_back({{"method", p.method}, {"windows", windows}, {"matched", p.num_matched}});
+    }
+  }
+  for (const MethodTrackingResult& t : summary.tracking) {
+    const TrackingCounts& c = t.counts;
+    j["tracking"].push_back({{"method", t.method},
+                             {"true_cars", c.true_cars},
+                             {"true_boxes", c.true_boxes},
+                             {"output_tracks", c.output_tracks},
+                             {"output_boxes", c.output_boxes},
+                             {"matches", c.matches},
+                             {"tracks_per_car", c.TracksPerCar()},
+                             {"main_track_share", c.MainTrackShare()},
+                             {"id_switches", c.id_switches},
+                             {"fragmentations", c.fragmentations},
+                             {"missed_cars", c.missed_cars},
+                             {"false_tracks", c.false_tracks},
+                             {"misses", c.misses},
+                             {"false_positives", c.false_positives},
+                             {"mota", c.Mota()},
+                             {"motp", c.Motp()}});
+  }
+  for (const DiagnosticsBand& b : summary.diagnostics) {
+    j["diagnostics"].push_back({{"method", b.method},
+                                {"min_distance", b.min_distance},
+                                {"max_distance", b.max_distance},
+                                {"count", b.count},
+                                {"along_ray_offset_median", b.along_ray_offset},
+                                {"abs_lateral_offset_median", b.abs_lateral_offset},
+                                {"abs_vertical_offset_median", b.abs_vertical_offset},
+                                {"size_error_median", {b.size_error[0], b.size_error[1], b.size_error[2]}},
+                                {"f1_median", b.f1},
+                                {"shape_count", b.num_shape}});
   }
   WriteTextFileAtomically((out / "results.json").string(), DumpJson(j, 2) + "\n");
   WritePlots(options, summary);

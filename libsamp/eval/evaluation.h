@@ -4,20 +4,29 @@
 // For every ground-truth car and frame (gt/label_02/<seq>.txt) whose object-map
 // segment has enough pixels:
 //  - true points: gt/depth inside the segment, back-projected;
-//  - per result with meshes: the result label of that frame matched to the car
-//    (greedy 2D IoU of the projected 3D boxes), its mesh rendered into the left
-//    camera at the label's pose, depth buffer read at the segment's pixels;
+//  - per result with meshes: the result label of that frame matched to the car,
+//    its mesh rendered into the left camera at the label's pose, depth buffer
+//    read at the segment's pixels. Two matchings, both reported: per track
+//    (each true car gets the one output track sharing most frames with it,
+//    frames matched by greedy 2D IoU of the projected 3D boxes; a fragmented or
+//    swapped track costs) and per frame (each true car-frame gets the nearest
+//    box of any track within per_frame_distance; abstracts from tracking);
 //  - the "stereo" baseline: the input disparity inside the segment;
-//  - the "detections" baseline (pose only): SEQ/detections matched the same way.
+//  - the "detections" baseline (pose only): SEQ/detections matched the same way
+//    (no track ids: per track = per-frame IoU).
 // Shape: accuracy, completeness and F1 for a sweep of tau; pose: translation
 // error and absolute yaw error in distance windows. Shape and pose statistics
 // are taken over the car-frames that every compared method matched (the
-// common set); each method's coverage is reported too.
+// common set); each method's coverage is reported too. Tracking: CLEAR-MOT
+// figures of each result (per-frame matching). Per-car diagnostics: offsets
+// of the origin along and across the viewing ray, box sizes, F1.
 #pragma once
 
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "libsamp/eval/metrics.h"
 
 namespace samp {
 
@@ -36,8 +45,12 @@ struct EvalOptions {
   double distance_window = 20.0;
   // Car-frames whose object-map segment has fewer pixels are not evaluated.
   int min_segment_pixels = 100;
-  // A result/detection box matches a ground-truth box when their 2D IoU is at least this.
+  // Per-track matching: a result/detection box matches a ground-truth box when
+  // their 2D IoU is at least this.
   double min_iou = 0.3;
+  // Per-frame matching and the tracking figures: a box matches a true car
+  // when their origins are at most this far apart, metres.
+  double per_frame_distance = 2.0;
   // Include the raw-stereo shape baseline and the input-detection pose baseline.
   bool stereo_baseline = true;
   bool detection_baseline = true;
@@ -71,21 +84,47 @@ struct MethodPoseResult {
   int num_matched = 0;
 };
 
+// CLEAR-MOT figures of one result (per-frame matching).
+struct MethodTrackingResult {
+  std::string method;
+  TrackingCounts counts;
+};
+
+// Medians of the per-car diagnostics over one distance band (per-frame matching).
+struct DiagnosticsBand {
+  std::string method;
+  double min_distance = 0.0, max_distance = 0.0;
+  int count = 0;
+  double along_ray_offset = 0.0;     // median, signed (+ = farther than the truth), m
+  double abs_lateral_offset = 0.0;   // median |across the ray|, m
+  double abs_vertical_offset = 0.0;  // median |vertical|, m
+  Eigen::Vector3d size_error = Eigen::Vector3d::Zero();  // median estimated - true h, w, l, m
+  double f1 = 0.0;                   // median F1 at the headline tau (shape methods)
+  int num_shape = 0;                 // car-frames with a shape score
+};
+
 struct EvalSummary {
   std::vector<double> taus;
   double headline_tau = 0.2;
   int num_sequences = 0;
   int num_gt_car_frames = 0;   // with a large enough segment
   int num_gt_tracks = 0;
+  // Per-track matching (each true car gets one output track; as before).
   std::vector<MethodShapeResult> shape;
   std::vector<MethodPoseResult> pose;
+  // Per-frame matching (each true car-frame gets the nearest box of any track).
+  std::vector<MethodShapeResult> shape_per_frame;
+  std::vector<MethodPoseResult> pose_per_frame;
+  // Tracking figures of each result, and the diagnostics by distance band.
+  std::vector<MethodTrackingResult> tracking;
+  std::vector<DiagnosticsBand> diagnostics;
   std::string markdown;        // the tables (also written to results.md)
   double seconds = 0.0;
   std::string BriefReport() const;
 };
 
 // Evaluates and writes OUT/results.md, results.json, shape.csv, pose.csv,
-// per_object.csv and the plots f1_vs_tau.png, accuracy_vs_tau.png,
+// per_object.csv, tracking.csv, per_car.csv and the plots f1_vs_tau.png, accuracy_vs_tau.png,
 // completeness_vs_tau.png, translation_vs_distance.png, yaw_vs_distance.png.
 // Throws samp::Error naming the file on missing or malformed input.
 EvalSummary Evaluate(const EvalOptions& options);

@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numeric>
+#include <set>
 
 #include "libsamp/core/error.h"
+#include "libsamp/data/tracking.h"
 
 namespace samp {
 
@@ -135,6 +138,142 @@ double Median(std::vector<double> values) {
   if (n % 2 == 1) return upper;
   const double lower = *std::max_element(values.begin(), values.begin() + n / 2);
   return 0.5 * (lower + upper);
+}
+
+
+void TrackingCounts::Add(const TrackingCounts& o) {
+  true_cars += o.true_cars;
+  true_boxes += o.true_boxes;
+  output_tracks += o.output_tracks;
+  output_boxes += o.output_boxes;
+  matches += o.matches;
+  misses += o.misses;
+  false_positives += o.false_positives;
+  id_switches += o.id_switches;
+  fragmentations += o.fragmentations;
+  tracks_on_cars += o.tracks_on_cars;
+  in_main_track += o.in_main_track;
+  missed_cars += o.missed_cars;
+  false_tracks += o.false_tracks;
+  distance_sum += o.distance_sum;
+}
+
+double TrackingCounts::Mota() const {
+  if (true_boxes == 0) return 0.0;
+  return 1.0 - double(misses + false_positives + id_switches) / true_boxes;
+}
+
+double TrackingCounts::Motp() const { return matches > 0 ? distance_sum / matches : 0.0; }
+
+double TrackingCounts::TracksPerCar() const {
+  const int matched_cars = true_cars - missed_cars;
+  return matched_cars > 0 ? double(tracks_on_cars) / matched_cars : 0.0;
+}
+
+double TrackingCounts::MainTrackShare() const { return matches > 0 ? double(in_main_track) / matches : 0.0; }
+
+std::vector<int> MatchTracks(const std::vector<TrackedBox>& truth, const std::vector<TrackedBox>& output,
+                             double max_distance, TrackingCounts* counts) {
+  SAMP_CHECK(max_distance > 0) << "MatchTracks: max_distance must be > 0";
+  std::map<int, std::vector<int>> truth_of_frame, output_of_frame;
+  for (size_t i = 0; i < truth.size(); ++i) truth_of_frame[truth[i].frame].push_back(int(i));
+  for (size_t i = 0; i < output.size(); ++i) output_of_frame[output[i].frame].push_back(int(i));
+  // An output box without a track id is a track of its own.
+  auto track_key = [&](int o) { return output[o].track_id >= 0 ? output[o].track_id : -1 - o; };
+  std::vector<int> match(truth.size(), -1);
+  std::vector<int> truth_of_output(output.size(), -1);
+  std::map<int, int> last_track;  // true car -> output track of its previous matched frame
+  for (const auto& [frame, t_boxes] : truth_of_frame) {
+    const auto found = output_of_frame.find(frame);
+    if (found == output_of_frame.end()) continue;
+    const std::vector<int>& o_boxes = found->second;
+    auto distance = [&](int t, int o) { return (truth[t].position - output[o].position).norm(); };
+    // 1. Correspondences of the previous matched frame that still hold.
+    for (int t : t_boxes) {
+      const auto last = last_track.find(truth[t].track_id);
+      if (last == last_track.end()) continue;
+      for (int o : o_boxes) {
+        if (truth_of_output[o] >= 0 || track_key(o) != last->second || distance(t, o) > max_distance) continue;
+        match[t] = o, truth_of_output[o] = t;
+        break;
+      }
+    }
+    // 2. The rest: Hungarian on the distance.
+    std::vector<int> rows, cols;
+    for (int t : t_boxes)
+      if (match[t] < 0) rows.push_back(t);
+    for (int o : o_boxes)
+      if (truth_of_output[o] < 0) cols.push_back(o);
+    std::vector<double> cost(rows.size() * cols.size(), kNoAssignment);
+    for (size_t r = 0; r < rows.size(); ++r)
+      for (size_t c = 0; c < cols.size(); ++c) {
+        const double d = distance(rows[r], cols[c]);
+        if (d <= max_distance) cost[r * cols.size() + c] = d;
+      }
+    const std::vector<int> assigned = SolveAssignment(cost, int(rows.size()), int(cols.size()));
+    for (size_t r = 0; r < rows.size(); ++r) {
+      if (assigned[r] < 0) continue;
+      match[rows[r]] = cols[assigned[r]];
+      truth_of_output[cols[assigned[r]]] = rows[r];
+    }
+    for (int t : t_boxes)
+      if (match[t] >= 0) last_track[truth[t].track_id] = track_key(match[t]);
+  }
+  if (counts == nullptr) return match;
+
+  TrackingCounts c;
+  // Per true car, its boxes in frame order.
+  std::map<int, std::vector<int>> boxes_of_car;
+  for (const auto& [frame, t_boxes] : truth_of_frame)
+    for (int t : t_boxes) boxes_of_car[truth[t].track_id].push_back(t);
+  std::set<int> matched_tracks;  // output tracks matched to any true box
+  for (size_t o = 0; o < output.size(); ++o)
+    if (truth_of_output[o] >= 0) matched_tracks.insert(track_key(int(o)));
+  for (const auto& [car, boxes] : boxes_of_car) {
+    std::map<int, int> per_track;
+    bool counted = false, was_matched = false, gap = false;
+    int previous = 0;
+    bool has_previous = false;
+    for (int t : boxes) {
+      if (truth[t].ignore) continue;
+      counted = true;
+      ++c.true_boxes;
+      if (match[t] < 0) {
+        ++c.misses;
+        if (was_matched) gap = true;
+        continue;
+      }
+      ++c.matches;
+      c.distance_sum += (truth[t].position - output[match[t]].position).norm();
+      const int key = track_key(match[t]);
+      ++per_track[key];
+      if (has_previous && key != previous) ++c.id_switches;
+      if (gap) ++c.fragmentations;
+      previous = key, has_previous = true, was_matched = true, gap = false;
+    }
+    if (!counted) continue;
+    ++c.true_cars;
+    if (per_track.empty()) {
+      ++c.missed_cars;
+      continue;
+    }
+    c.tracks_on_cars += int(per_track.size());
+    int main = 0;
+    for (const auto& [key, n] : per_track) main = std::max(main, n);
+    c.in_main_track += main;
+  }
+  std::set<int> tracks;
+  for (size_t o = 0; o < output.size(); ++o) {
+    tracks.insert(track_key(int(o)));
+    const int t = truth_of_output[o];
+    if (t >= 0 && truth[t].ignore) continue;
+    ++c.output_boxes;
+    if (t < 0) ++c.false_positives;
+  }
+  c.output_tracks = int(tracks.size());
+  for (int key : tracks) c.false_tracks += matched_tracks.count(key) == 0;
+  counts->Add(c);
+  return match;
 }
 
 }  // namespace samp

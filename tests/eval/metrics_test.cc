@@ -113,5 +113,76 @@ TEST(PoseErrors, MeanAndMedian) {
   EXPECT_DOUBLE_EQ(Mean({1.0, 2.0, 6.0}), 3.0);
 }
 
+
+// CLEAR-MOT on a hand-made sequence: car 0 is tracked by track 7, lost for a
+// frame, then continues as track 8 (a fragment: one ID switch, one FRAG);
+// car 1 is tracked by track 9 throughout, with a false positive (track 20) in
+// frame 2 and a box beside an ignored (barely visible) car 2.
+TEST(ClearMot, FragmentSwitchAndFalsePositive) {
+  std::vector<TrackedBox> truth, output;
+  for (int f = 0; f < 6; ++f) {
+    truth.push_back({f, 0, Eigen::Vector3d(-3.0 + 0.5 * f, 1.6, 20.0), false});
+    truth.push_back({f, 1, Eigen::Vector3d(3.0, 1.6, 30.0 - f), false});
+    if (f != 2) output.push_back({f, f < 2 ? 7 : 8, Eigen::Vector3d(-3.0 + 0.5 * f + 0.3, 1.6, 20.5), false});
+    output.push_back({f, 9, Eigen::Vector3d(3.2, 1.6, 30.0 - f - 0.8), false});
+  }
+  output.push_back({2, 20, Eigen::Vector3d(-8.0, 1.6, 12.0), false});  // nothing there
+  truth.push_back({4, 2, Eigen::Vector3d(9.0, 1.6, 8.0), true});       // too few pixels
+  output.push_back({4, 21, Eigen::Vector3d(9.5, 1.6, 8.0), false});
+  TrackingCounts counts;
+  const std::vector<int> match = MatchTracks(truth, output, 2.0, &counts);
+  ASSERT_EQ(match.size(), truth.size());
+  EXPECT_EQ(match[4], -1);  // car 0 in frame 2: lost
+  EXPECT_EQ(counts.true_cars, 2);
+  EXPECT_EQ(counts.true_boxes, 12);
+  EXPECT_EQ(counts.matches, 11);
+  EXPECT_EQ(counts.misses, 1);
+  EXPECT_EQ(counts.false_positives, 1);  // track 20; track 21 sits on the ignored car
+  EXPECT_EQ(counts.id_switches, 1);
+  EXPECT_EQ(counts.fragmentations, 1);
+  EXPECT_EQ(counts.tracks_on_cars, 3);
+  EXPECT_DOUBLE_EQ(counts.TracksPerCar(), 1.5);
+  EXPECT_EQ(counts.in_main_track, 6 + 3);  // car 0: track 8 has 3 of its 5 matches
+  EXPECT_EQ(counts.missed_cars, 0);
+  EXPECT_EQ(counts.output_tracks, 5);
+  EXPECT_EQ(counts.false_tracks, 1);
+  EXPECT_NEAR(counts.Mota(), 1.0 - 3.0 / 12.0, 1e-12);
+  EXPECT_GT(counts.Motp(), 0.3);
+  EXPECT_LT(counts.Motp(), 0.9);
+  // Beyond the distance nothing matches.
+  TrackingCounts none;
+  MatchTracks(truth, output, 0.1, &none);
+  EXPECT_EQ(none.matches, 0);
+  EXPECT_EQ(none.missed_cars, 2);
+  EXPECT_THROW(MatchTracks(truth, output, 0.0, nullptr), Error);
+}
+
+// Two cars crossing: the output swaps their tracks in the middle. A car keeps
+// the track it had while that track's box stays within the distance
+// (CLEAR-MOT), so the swap costs two ID switches, not more.
+TEST(ClearMot, SwapCostsTwoSwitches) {
+  std::vector<TrackedBox> truth, output;
+  for (int f = 0; f < 8; ++f) {
+    const Eigen::Vector3d a(-4.0 + f, 1.6, 20.0), b(4.0 - f, 1.6, 23.0);
+    truth.push_back({f, 0, a, false});
+    truth.push_back({f, 1, b, false});
+    output.push_back({f, f < 4 ? 1 : 2, a, false});
+    output.push_back({f, f < 4 ? 2 : 1, b, false});
+  }
+  TrackingCounts counts;
+  MatchTracks(truth, output, 2.0, &counts);
+  EXPECT_EQ(counts.matches, 16);
+  EXPECT_EQ(counts.id_switches, 2);
+  EXPECT_EQ(counts.fragmentations, 0);
+  EXPECT_DOUBLE_EQ(counts.TracksPerCar(), 2.0);
+  EXPECT_DOUBLE_EQ(counts.MainTrackShare(), 0.5);
+  // Boxes without track ids are tracks of their own.
+  for (TrackedBox& b : output) b.track_id = -1;
+  TrackingCounts untracked;
+  MatchTracks(truth, output, 2.0, &untracked);
+  EXPECT_EQ(untracked.output_tracks, 16);
+  EXPECT_EQ(untracked.id_switches, 14);
+}
+
 }  // namespace
 }  // namespace samp

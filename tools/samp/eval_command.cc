@@ -24,7 +24,9 @@ void RegisterEvalCommand(CLI::App* app) {
       "Evaluate fitted tracks on synthetic sequences with ground truth (docs/evaluation.md):\n"
       "accuracy, completeness and F1 of the visible surface over a sweep of tau, translation and\n"
       "yaw errors by distance; baselines: raw stereo points and the input detections.\n"
-      "Writes results.md, results.json, shape.csv, pose.csv, per_object.csv and PNG plots.");
+      "Both matchings (per track, per frame), CLEAR-MOT tracking figures, per-car diagnostics.\n"
+      "Writes results.md, results.json, shape.csv, pose.csv, per_object.csv, per_car.csv,\n"
+      "tracking.csv and PNG plots.");
   command->add_option("--seq", o.sequences, "A synthetic sequence folder (with gt/); repeatable")
       ->required()
       ->check(CLI::ExistingDirectory);
@@ -42,7 +44,12 @@ void RegisterEvalCommand(CLI::App* app) {
   command->add_option("--min-pixels", o.min_segment_pixels,
                       "Evaluate car-frames with at least this many visible pixels")
       ->capture_default_str();
-  command->add_option("--min-iou", o.min_iou, "2D IoU needed to match a result box to the truth")
+  command->add_option("--min-iou", o.min_iou,
+                      "Per-track matching: 2D IoU needed to match a result box to the truth")
+      ->capture_default_str();
+  command->add_option("--match-distance", o.per_frame_distance,
+                      "Per-frame matching and tracking figures: largest distance of a box's origin to the "
+                      "true car's, m")
       ->capture_default_str();
   command->add_flag("--no-stereo", args->no_stereo, "Leave out the raw-stereo shape baseline");
   command->add_flag("--no-detections", args->no_detections, "Leave out the input-detection pose baseline");
