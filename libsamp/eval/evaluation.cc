@@ -755,7 +755,15 @@ EvalSummary Evaluate(const EvalOptions& options) {
   std::vector<MethodInfo> methods;
   if (options.stereo_baseline) methods.push_back({kStereo, "", true, false});
   if (options.detection_baseline) methods.push_back({kDetections, "", false, true});
-  for (const auto& [name, folder] : options.results) methods.push_back({name, folder, true, true});
+  // A result without meshes (e.g. `samp fit --link-only`, another tracker's
+  // labels) is evaluated for pose and tracking only.
+  auto has_meshes = [](const std::string& folder) {
+    if (fs::is_directory(fs::path(folder) / "meshes")) return true;
+    for (const auto& entry : fs::directory_iterator(folder))
+      if (entry.is_directory() && fs::is_directory(entry.path() / "meshes")) return true;
+    return false;
+  };
+  for (const auto& [name, folder] : options.results) methods.push_back({name, folder, has_meshes(folder), true});
 
   std::vector<Record> records;
   std::set<std::string> tracks;

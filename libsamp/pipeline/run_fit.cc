@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <memory>
 #include <mutex>
 #include <sstream>
 
@@ -22,7 +23,7 @@ namespace samp {
 namespace fs = std::filesystem;
 
 bool RunFitOptions::Check() const {
-  SAMP_CHECK(!model_path.empty()) << "RunFitOptions.model_path is empty";
+  SAMP_CHECK(link_only || !model_path.empty()) << "RunFitOptions.model_path is empty";
   SAMP_CHECK(!sequences.empty()) << "RunFitOptions.sequences is empty (give at least one --seq)";
   SAMP_CHECK(tracking_labels.empty() || tracking_labels.size() == sequences.size())
       << "RunFitOptions.tracking_labels: " << tracking_labels.size() << " files for "
@@ -64,7 +65,8 @@ std::string MeshPrefix(const RunFitOptions& options, const std::string& seq, int
   return dir + "track_" + std::to_string(track_id);
 }
 
-void FitSequence(const RunFitOptions& options, const TrackFitter& fitter, size_t index,
+// fitter == nullptr: link only (the tracks' detections are the labels).
+void FitSequence(const RunFitOptions& options, const TrackFitter* fitter, size_t index,
                  SequenceWork* work) {
   const auto start = std::chrono::steady_clock::now();
   SequenceFitResult& result = work->result;
@@ -84,11 +86,32 @@ void FitSequence(const RunFitOptions& options, const TrackFitter& fitter, size_t
   }
   result.ok = true;
   result.num_tracks = int(tracks.size());
+  if (fitter == nullptr) {
+    std::vector<ObjectLabel> labels;
+    for (const Track& track : tracks)
+      for (const TrackFrame& frame : track.frames) {
+        ObjectLabel label = frame.detection;
+        label.frame = frame.frame;
+        label.track_id = track.id;
+        labels.push_back(label);
+      }
+    std::stable_sort(labels.begin(), labels.end(), [](const ObjectLabel& a, const ObjectLabel& b) {
+      return a.frame != b.frame ? a.frame < b.frame : a.track_id < b.track_id;
+    });
+    try {
+      WriteTrackingLabels((fs::path(options.output_dir) / "label_02" / (result.name + ".txt")).string(), labels);
+    } catch (const std::exception& e) {
+      result.ok = false;
+      result.error = std::string("writing labels: ") + e.what();
+    }
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return;
+  }
   std::vector<TrackFit> fits(tracks.size());
   std::vector<std::string> errors(tracks.size());
   tbb::parallel_for(size_t(0), tracks.size(), [&](size_t t) {
     try {
-      fits[t] = fitter.Fit(tracks[t]);
+      fits[t] = fitter->Fit(tracks[t]);
       if (fits[t].sequence.empty()) fits[t].sequence = result.name;
     } catch (const std::exception& e) {
       errors[t] = e.what();
@@ -103,11 +126,11 @@ void FitSequence(const RunFitOptions& options, const TrackFitter& fitter, size_t
     }
     try {
       const TrackFit& fit = fits[t];
-      const std::vector<ObjectLabel> track_labels = FitToLabels(fit, tracks[t], fitter.lookup());
-      nlohmann::json j = TrackFitToJson(fit, FittedBox(fitter.lookup(), fit.shape_code));
+      const std::vector<ObjectLabel> track_labels = FitToLabels(fit, tracks[t], fitter->lookup());
+      nlohmann::json j = TrackFitToJson(fit, FittedBox(fitter->lookup(), fit.shape_code));
       if (options.write_meshes) {
         const std::string prefix = MeshPrefix(options, result.name, fit.track_id);
-        const Mesh mesh = FittedSurface(fitter.lookup(), fit.shape_code);
+        const Mesh mesh = FittedSurface(fitter->lookup(), fit.shape_code);
         WritePly((fs::path(options.output_dir) / (prefix + ".ply")).string(), mesh);
         WritePly((fs::path(options.output_dir) / (prefix + "_points.ply")).string(),
                  AlignedObservations(fit));
@@ -141,17 +164,25 @@ void FitSequence(const RunFitOptions& options, const TrackFitter& fitter, size_t
 RunFitSummary RunFit(const RunFitOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   options.Check();
-  const ShapeModel model = ShapeModel::Load(options.model_path);
-  const TrackFitter fitter(model, options.fit);
+  std::unique_ptr<ShapeModel> model;
+  std::unique_ptr<TrackFitter> fitter;
+  if (!options.link_only) {
+    model = std::make_unique<ShapeModel>(ShapeModel::Load(options.model_path));
+    fitter = std::make_unique<TrackFitter>(*model, options.fit);
+  }
   fs::create_directories(options.output_dir);
-  LogInfo() << "fitting " << options.sequences.size() << " sequence(s) with model " << options.model_path
-            << " (" << model.NumComponents() << " components), "
-            << (options.fit.single_frame ? "single-frame" : "joint SAMP") << " mode";
+  if (options.link_only) {
+    LogInfo() << "linking " << options.sequences.size() << " sequence(s) into tracks (no fit)";
+  } else {
+    LogInfo() << "fitting " << options.sequences.size() << " sequence(s) with model " << options.model_path
+              << " (" << model->NumComponents() << " components), "
+              << (options.fit.single_frame ? "single-frame" : "joint SAMP") << " mode";
+  }
 
   std::vector<SequenceWork> work(options.sequences.size());
   tbb::task_arena arena(options.num_threads);
   arena.execute([&] {
-    tbb::parallel_for(size_t(0), work.size(), [&](size_t i) { FitSequence(options, fitter, i, &work[i]); });
+    tbb::parallel_for(size_t(0), work.size(), [&](size_t i) { FitSequence(options, fitter.get(), i, &work[i]); });
   });
 
   RunFitSummary summary;
@@ -180,7 +211,8 @@ RunFitSummary RunFit(const RunFitOptions& options) {
 
   nlohmann::json config;
   config["model"] = options.model_path;
-  config["model_components"] = model.NumComponents();
+  config["model_components"] = model ? model->NumComponents() : 0;
+  config["link_only"] = options.link_only;
   config["sequences"] = options.sequences;
   config["tracking_labels"] = options.tracking_labels;
   config["fit"] = FitOptionsToJson(options.fit);

@@ -34,6 +34,11 @@ struct RunFitOptions {
   int num_threads = 1;
   // Write meshes and aligned points.
   bool write_meshes = true;
+  // Only link the detections into tracks and write their detections as the
+  // labels (label_02/<seq>.txt, tracks.json with the tracking summaries,
+  // config.json): no model, no fit. The labels can be evaluated (pose and
+  // tracking) or given back as --tracks.
+  bool link_only = false;
 
   bool Check() const;
 };

@@ -158,6 +158,9 @@ void RegisterFitCommand(CLI::App* app) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   AddTrackerOptions(command, &o.sequence.tracker);
+  command->add_flag("--link-only", o.link_only,
+                    "Only link detections/ into tracks and write the tracked detections as "
+                    "label_02/<seq>.txt (no model, no fit; for samp eval's tracking figures or --tracks)");
   command->add_flag_callback("--no-meshes", [options] { options->write_meshes = false; },
                     "Do not write meshes/ (PLY surfaces and aligned points)");
   command->add_flag("--pictures", visuals->pictures,
@@ -170,8 +173,10 @@ void RegisterFitCommand(CLI::App* app) {
       ->check(CLI::PositiveNumber);
   AddCommonOptions(command);
   command->callback([options, visuals] {
-    SAMP_CHECK(!options->model_path.empty())
+    SAMP_CHECK(options->link_only || !options->model_path.empty())
         << "no --model given and this build has no default model";
+    SAMP_CHECK(!(options->link_only && (visuals->pictures || visuals->html)))
+        << "--link-only fits nothing: --pictures and --html need fitted shapes";
     const RunFitSummary summary = RunFit(*options);
     std::cout << summary.BriefReport() << std::endl;
     std::cout << "wrote " << options->output_dir << std::endl;
@@ -180,7 +185,7 @@ void RegisterFitCommand(CLI::App* app) {
     }
     int num_detections = 0;
     for (const auto& q : summary.sequences) num_detections += q.input.tracking.num_detections;
-    if (summary.num_tracks_fitted == 0 && num_detections > 0) {
+    if (!options->link_only && summary.num_tracks_fitted == 0 && num_detections > 0) {
       SAMP_THROW() << "no track was fitted although the input had " << num_detections
                    << " detection(s) (see the messages above)";
     }
