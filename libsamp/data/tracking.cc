@@ -521,14 +521,16 @@ double MedianLength(std::vector<int> lengths) {
 }
 
 // Fills the counts of kept tracks, their median length and the warning.
-void FinishSummary(const std::vector<LinkedTrack>& tracks, int warn_median_length, TrackingSummary* summary) {
+void FinishSummary(const std::vector<LinkedTrack>& tracks, int warn_median_length, int num_frames,
+                   TrackingSummary* summary) {
   summary->num_tracks = static_cast<int>(tracks.size());
   std::vector<int> lengths;
   for (const LinkedTrack& t : tracks) lengths.push_back(static_cast<int>(t.detections.size()));
   summary->median_track_length = MedianLength(lengths);
-  if (!tracks.empty() && summary->median_track_length < warn_median_length) {
+  const double shortest = std::min(double(warn_median_length), 0.5 * num_frames);
+  if (!tracks.empty() && summary->median_track_length < shortest) {
     std::ostringstream w;
-    w << "median track length " << summary->median_track_length << " detections < " << warn_median_length
+    w << "median track length " << summary->median_track_length << " detections < " << shortest
       << " (" << tracks.size() << " tracks of " << summary->num_detections
       << " detections): the tracker may be splitting cars; check the detector noise options "
          "(--tracker-*, docs/sequence_format.md) or give tracks with --tracks";
@@ -716,7 +718,7 @@ std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& fram
     for (ObjectLabel& label : out.detections) label.track_id = out.id;
     linked.push_back(std::move(out));
   }
-  FinishSummary(linked, options.warn_median_length, &result);
+  FinishSummary(linked, options.warn_median_length, static_cast<int>(frames.size()), &result);
   return linked;
 }
 
@@ -751,7 +753,7 @@ std::vector<LinkedTrack> TracksFromLabels(const std::vector<ObjectLabel>& labels
     }
     tracks.push_back(LinkedTrack{id, detections});
   }
-  FinishSummary(tracks, 0, &result);
+  FinishSummary(tracks, 0, 0, &result);
   return tracks;
 }
 

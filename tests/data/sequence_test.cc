@@ -294,7 +294,9 @@ TEST_F(SequenceTest, BadInputNamesTheFile) {
   // Malformed detection.
   std::ofstream((dir_ / "detections" / (Tag(2) + ".txt")).string()) << "Car 0 0 0 1 2 3 4 1 1 1 0 1.6 -4 0\n";
   ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "000007_02.txt:1: object at z = -4");
-  WriteLabels((dir_ / "detections" / (Tag(2) + ".txt")).string(), {});
+  // The car again (a lone detection in frame 0 followed by two misses would
+  // start no track, and no frame would be read).
+  WriteLabels((dir_ / "detections" / (Tag(2) + ".txt")).string(), {CarDetection(SmallCalibration(), 2)});
   // Disparity of the wrong size.
   WriteDisparity((dir_ / "disparity" / (Tag(0) + ".png")).string(), cv::Mat(10, 10, CV_32FC1, cv::Scalar(5)));
   ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "000007_00.png: disparity is 10x10");
