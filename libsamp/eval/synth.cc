@@ -865,7 +865,13 @@ cv::Mat ShadeStreetView(const SynthOptions& options, const Scene& scene, int fra
             material.specular = 0.05;
             material.shininess = 20.0;
           } else if (p_object.y() < -0.62 * car.height && std::abs(n_object.y()) < 0.85) {  // windows
-            material.albedo = Eigen::Vector3d(0.02, 0.025, 0.03);
+            // Tinted glass; what lies behind it (seats, headrests, the far windows) is
+            // drawn on the glass plane as a blotchy grey of mean window_interior_albedo.
+            const double interior =
+                procedural::Fractal(p_object, 5.0, 4, footprint, Mix(uint64_t(car.track_id), 91));
+            material.albedo = Eigen::Vector3d(0.02, 0.025, 0.03) +
+                              Eigen::Vector3d::Constant(options.window_interior_albedo *
+                                                        std::max(0.0, 1.0 + 2.5 * interior));
             material.specular = 1.2;
             material.shininess = 250.0;
             material.fresnel_f0 = options.glass_fresnel_f0;
@@ -1270,6 +1276,7 @@ SynthOptions SynthOptions::Clean() {
   o.max_ego_speed = 8.0;
   o.max_ego_yaw_rate = 0.04;
   o.ego_pitch_sway_deg = o.ego_roll_sway_deg = o.ego_bounce = o.ego_max_pitch_offset_deg = 0.0;
+  o.image_noise_sigma = 2.0;  // the first benchmark's image noise (the street default is 0.7)
   // The first benchmark's detections: 3DOP-like, white, no false positives.
   DetectorModelOptions& d = o.detector;
   d.ray_sigma_a = 0.1;
@@ -1329,8 +1336,10 @@ void SynthOptions::Check() const {
              max_sun_elevation_deg <= 90)
       << "synth: need 0 < min_sun_elevation_deg <= max_sun_elevation_deg <= 90";
   SAMP_CHECK(paint_specular >= 0 && paint_shininess >= 1 && paint_fresnel_f0 >= 0 && paint_fresnel_f0 < 1 &&
-             glass_fresnel_f0 >= 0 && glass_fresnel_f0 < 1 && paint_texture >= 0)
-      << "synth: need paint_specular >= 0, paint_shininess >= 1, 0 <= paint/glass F0 < 1, paint_texture >= 0";
+             glass_fresnel_f0 >= 0 && glass_fresnel_f0 < 1 && paint_texture >= 0 && window_interior_albedo >= 0 &&
+             window_interior_albedo <= 0.5)
+      << "synth: need paint_specular >= 0, paint_shininess >= 1, 0 <= paint/glass F0 < 1, paint_texture >= 0, "
+         "0 <= window_interior_albedo <= 0.5";
   street.Check();
   detector.Check();
 }
@@ -1382,6 +1391,7 @@ std::string SynthOptions::ToJson() const {
       {"paint_fresnel_f0", paint_fresnel_f0},
       {"glass_fresnel_f0", glass_fresnel_f0},
       {"paint_texture", paint_texture},
+      {"window_interior_albedo", window_interior_albedo},
       {"shadows", shadows},
       {"street",
        {{"two_lane_probability", street.two_lane_probability},

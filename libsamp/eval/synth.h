@@ -110,15 +110,20 @@ struct SynthOptions {
   // Lighting and paint (kStreet): sun elevation range (deg), paint clear coat
   // (Blinn-Phong sun highlight strength and exponent, Schlick F0 of the sky
   // reflection), glass F0, relative strength of the paint's texture (dirt,
-  // orange peel), and cast shadows.
+  // orange peel), and cast shadows. Calibrated so that raw SGBM stereo scores as
+  // libELAS on KITTI (docs/synthetic.md "Calibration", docs/results.md).
   double min_sun_elevation_deg = 20.0, max_sun_elevation_deg = 65.0;
-  double paint_specular = 0.6, paint_shininess = 80.0, paint_fresnel_f0 = 0.05;
-  double glass_fresnel_f0 = 0.08;
-  double paint_texture = 0.04;
+  double paint_specular = 0.6, paint_shininess = 80.0, paint_fresnel_f0 = 0.04;
+  double glass_fresnel_f0 = 0.04;
+  double paint_texture = 0.3;
+  // Mean albedo of what is seen through the tinted windows (the interior), drawn
+  // as a blotchy texture on the glass; 0 = black glass.
+  double window_interior_albedo = 0.08;
   bool shadows = true;
 
-  // Image noise: Gaussian, std. dev. in 8-bit grey levels, independent per pixel and camera.
-  double image_noise_sigma = 2.0;
+  // Image noise: Gaussian, std. dev. in 8-bit grey levels, independent per pixel and camera
+  // (the clean preset: 2).
+  double image_noise_sigma = 0.7;
 
   DisparitySource disparity = DisparitySource::kStereoSgbm;
   // kTrueWithNoise: Gaussian disparity noise (px) on the background and on cars

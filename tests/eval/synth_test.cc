@@ -218,6 +218,11 @@ TEST(Synth, RejectsBadOptions) {
   options = test::QuickSynthOptions("/nonexistent/never", 1);
   options.min_distance = 50.0;
   EXPECT_THROW(options.Check(), Error);
+  options = test::QuickSynthOptions("/nonexistent/never", 1);
+  options.window_interior_albedo = -0.1;
+  EXPECT_THROW(options.Check(), Error);
+  options.window_interior_albedo = 0.6;
+  EXPECT_THROW(options.Check(), Error);
   EXPECT_THROW(SynthesizeSequences(test::QuickSynthOptions("/nonexistent/never", 1), {}), Error);
 }
 

@@ -187,6 +187,8 @@ void RegisterSynthCommand(CLI::App* app) {
                 "Street: Schlick F0 of the windows' sky reflection");
   t.Add<double>("--paint-texture", [](O& o) -> double& { return o.paint_texture; },
                 "Street: relative amplitude of the paint's texture (dirt, orange peel)");
+  t.Add<double>("--window-interior", [](O& o) -> double& { return o.window_interior_albedo; },
+                "Street: mean albedo of the car interior seen through the windows (0 = black glass)");
   command->add_flag("--no-shadows", args->no_shadows, "Street: no cast sun shadows");
   t.Add<double>("--image-noise", [](O& o) -> double& { return o.image_noise_sigma; },
                 "Image noise std. dev., grey levels");
