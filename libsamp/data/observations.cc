@@ -26,6 +26,8 @@ bool ObservationOptions::Check() const {
       << "ObservationOptions.min_height_above_road must be finite";
   SAMP_CHECK(max_distance_to_detection > 0)
       << "ObservationOptions.max_distance_to_detection must be > 0";
+  SAMP_CHECK(std::isfinite(depth_gate_sigmas) && depth_gate_sigmas >= 0)
+      << "ObservationOptions.depth_gate_sigmas must be >= 0";
   SAMP_CHECK(min_disparity_px > 0) << "ObservationOptions.min_disparity_px must be > 0";
   SAMP_CHECK(sigma_disparity_px > 0) << "ObservationOptions.sigma_disparity_px must be > 0";
   SAMP_CHECK(max_points_per_frame >= 0) << "ObservationOptions.max_points_per_frame must be >= 0";
@@ -71,7 +73,19 @@ int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& ca
   std::vector<Eigen::Vector3d> points_in_world;
   std::vector<float> depths;
   for (const StereoPoint& p : stereo) {
-    if ((p.point_in_camera - center_in_camera).squaredNorm() > max_distance_sq) continue;
+    if ((p.point_in_camera - center_in_camera).squaredNorm() > max_distance_sq) {
+      if (options.depth_gate_sigmas <= 0.0) continue;
+      const double length = p.point_in_camera.norm();
+      const Eigen::Vector3d u = p.point_in_camera / length;
+      const double along = center_in_camera.dot(u);
+      const double lateral_sq = std::max(0.0, center_in_camera.squaredNorm() - along * along);
+      if (lateral_sq > max_distance_sq) continue;
+      const double sigma_ray =
+          DepthSigma(p.point_in_camera.z(), options.sigma_disparity_px, calibration) / std::max(u.z(), 1e-3);
+      if (std::abs(length - along) > options.max_distance_to_detection + options.depth_gate_sigmas * sigma_ray) {
+        continue;
+      }
+    }
     const Eigen::Vector3d point_in_world = frame->world_from_camera * p.point_in_camera;
     if (plane.head<3>().dot(point_in_world) + plane[3] <= options.min_height_above_road) continue;
     points_in_world.push_back(point_in_world);
@@ -91,6 +105,7 @@ int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& ca
     keep.resize(options.max_points_per_frame);
     std::sort(keep.begin(), keep.end());
   }
+  frame->candidate_pixels_per_point = keep.empty() ? 1.0 : double(total) / double(keep.size());
   frame->candidate_points_in_world.reserve(keep.size());
   frame->candidate_sigmas.reserve(keep.size());
   frame->candidate_depths.reserve(keep.size());

@@ -21,6 +21,13 @@ struct ObservationOptions {
   // the fitter gates to 3 m around the detection, and re-associates around
   // its fitted trajectory (hard EM) from this larger set.
   double max_distance_to_detection = 4.0;
+  // ... or, when its viewing ray passes within max_distance_to_detection of
+  // the centre, within max_distance_to_detection + depth_gate_sigmas
+  // sigma_ray of it along the ray (sigma_ray = sigma_d / cos of the ray to
+  // the optical axis): far away the stereo noise along the ray (metres)
+  // exceeds the sphere, which would cut it unevenly about a detection that is
+  // itself off along the ray. 0 = the sphere alone.
+  double depth_gate_sigmas = 3.0;
   // Disparities below this are ignored (too far / unreliable), px.
   double min_disparity_px = 1.0;
   // Disparity noise used for sigma_d = z^2 sigma_disparity / (b f), px.

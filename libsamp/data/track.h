@@ -44,6 +44,9 @@ struct TrackFrame {
   std::vector<Eigen::Vector3d> candidate_points_in_world;
   std::vector<double> candidate_sigmas;
   std::vector<float> candidate_depths;  // depth in the camera of this frame, metres
+  // Image pixels each candidate stands for (>= 1: the candidates may be a
+  // subsample of the valid pixels); the fitter's effective observation count.
+  double candidate_pixels_per_point = 1.0;
 };
 
 struct Track {

@@ -61,14 +61,36 @@ struct Association {
   std::vector<double> sigmas;
 };
 
-Association AssociateByDetection(const TrackFrame& f, double radius) {
+// Initial association around the detection's box centre. kPaper /
+// kRayDepth: within `radius` (a sphere). kDisparity: the point's viewing ray
+// passes within `radius` of the centre and its distance along the ray lies
+// within radius + 3 sigma (sigma along the ray) of the centre's: a sphere
+// would cut the stereo noise of far cars (sigma of metres along the ray)
+// unevenly about a detection that is itself off along the ray, and bias the
+// fit.
+Association AssociateByDetection(const TrackFrame& f, double radius, DataTerm term) {
   Association a;
   const Eigen::Vector3d centre =
       f.world_from_camera *
       (f.detection.position - Eigen::Vector3d(0.0, 0.5 * f.detection.height, 0.0));
+  const Eigen::Vector3d camera = f.world_from_camera.translation();
+  const Eigen::Vector3d axis = f.world_from_camera.linear().col(2);
   for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
-    if ((f.candidate_points_in_world[i] - centre).norm() <= radius) {
-      a.points.push_back(f.candidate_points_in_world[i]);
+    const Eigen::Vector3d& p = f.candidate_points_in_world[i];
+    bool keep;
+    if (term == DataTerm::kDisparity) {
+      const Eigen::Vector3d ray = p - camera;
+      const double length = ray.norm();
+      const Eigen::Vector3d u = ray / length;
+      const double along = (centre - camera).dot(u);
+      const double lateral = ((centre - camera) - along * u).norm();
+      const double sigma_along = f.candidate_sigmas[i] / std::max(u.dot(axis), 1e-3);
+      keep = lateral <= radius && std::abs(length - along) <= radius + 3.0 * sigma_along;
+    } else {
+      keep = (p - centre).norm() <= radius;
+    }
+    if (keep) {
+      a.points.push_back(p);
       a.sigmas.push_back(f.candidate_sigmas[i]);
     }
   }
@@ -77,24 +99,75 @@ Association AssociateByDetection(const TrackFrame& f, double radius) {
 
 Association AssociateByFit(const TrackFrame& f, const ShapeLookup& lookup, const Eigen::VectorXd& z,
                            const Eigen::Vector4d& pose, const AlignedBox& box,
-                           const FitOptions& options) {
+                           const FitOptions& options, std::string* why) {
   Association a;
+  int outside_box = 0, too_far = 0;
   const Eigen::Isometry3d object_from_world = ObjectFromWorld(pose.head<3>(), pose[3]);
   const Eigen::Vector3d lo = box.min - Eigen::Vector3d::Constant(options.em_box_margin);
   const Eigen::Vector3d hi = box.max + Eigen::Vector3d::Constant(options.em_box_margin);
   for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
     const Eigen::Vector3d o = object_from_world * f.candidate_points_in_world[i];
-    if ((o.array() < lo.array()).any() || (o.array() > hi.array()).any()) continue;
+    if ((o.array() < lo.array()).any() || (o.array() > hi.array()).any()) {
+      ++outside_box;
+      continue;
+    }
     if (std::abs(lookup.Evaluate(z.data(), o.data(), nullptr, nullptr)) >= options.em_distance_threshold) {
+      ++too_far;
       continue;
     }
     a.points.push_back(f.candidate_points_in_world[i]);
     a.sigmas.push_back(f.candidate_sigmas[i]);
   }
+  std::ostringstream s;
+  s << a.points.size() << " of " << f.candidate_points_in_world.size() << " candidates kept; " << outside_box
+    << " outside the fitted box + " << options.em_box_margin << " m, " << too_far << " with |phi| >= "
+    << options.em_distance_threshold << " m";
+  *why = s.str();
   return a;
 }
 
-void CheckTrack(const Track& track, const FitOptions& options) {
+SdfCostOptions DataTermOptions(const Track& track, const TrackFrame& f, const FitOptions& options, double weight);
+
+// EM association of the disparity term: the candidates whose residual at the
+// fitted shape and pose is an inlier of the mixture (|s_i| below the
+// outlier threshold): on a ray that meets the shape, a disparity within s_0
+// sigma of the visible surface's; on a ray that misses it, within s_0
+// silhouette sigmas of the silhouette. *why says how many were dropped and why.
+Association AssociateByResiduals(const Track& track, const TrackFrame& f, const ShapeLookup& lookup,
+                                 const Eigen::VectorXd& z, const Eigen::Vector4d& pose, const FitOptions& options,
+                                 std::string* why) {
+  Association a;
+  std::ostringstream s;
+  if (f.candidate_points_in_world.empty()) {
+    *why = "no candidate points (none inside the detection's 2D box above the road)";
+    return a;
+  }
+  const SdfCost cost(&lookup, f.candidate_points_in_world, f.candidate_sigmas,
+                     DataTermOptions(track, f, options, 1.0));
+  const std::vector<RayResidual> residuals = cost.RayResiduals(z.data(), pose.data());
+  int in_front = 0, behind = 0, missing = 0;
+  for (size_t i = 0; i < residuals.size(); ++i) {
+    const RayResidual& r = residuals[i];
+    if (std::abs(r.value) < options.outlier_threshold) {
+      a.points.push_back(f.candidate_points_in_world[i]);
+      a.sigmas.push_back(f.candidate_sigmas[i]);
+    } else if (!r.hit) {
+      ++missing;
+    } else if (r.value > 0.0) {
+      ++in_front;
+    } else {
+      ++behind;
+    }
+  }
+  s << a.points.size() << " of " << residuals.size() << " candidates kept; " << in_front
+    << " in front of the fitted surface, " << behind << " behind it (by > " << options.outlier_threshold
+    << " sigma_disp), " << missing << " on rays missing the shape by > " << options.outlier_threshold
+    << " silhouette sigmas";
+  *why = s.str();
+  return a;
+}
+
+void CheckTrack(const Track& track) {
   const std::string name = "track " + std::to_string(track.id) +
                            (track.sequence.empty() ? "" : " of sequence " + track.sequence);
   SAMP_CHECK(!track.frames.empty()) << name << " has no frames";
@@ -125,6 +198,16 @@ void CheckTrack(const Track& track, const FitOptions& options) {
 
 }  // namespace
 
+const char* DataWeightingName(DataWeighting weighting) {
+  return weighting == DataWeighting::kMean ? "mean" : "effective";
+}
+
+DataWeighting ParseDataWeighting(const std::string& name) {
+  if (name == "mean") return DataWeighting::kMean;
+  if (name == "effective") return DataWeighting::kEffective;
+  SAMP_THROW() << "unknown data weighting '" << name << "' (mean, effective)";
+}
+
 bool FitOptions::Check() const {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   SAMP_CHECK(em_iterations >= 0) << "FitOptions.em_iterations must be >= 0, got " << em_iterations;
@@ -136,6 +219,9 @@ bool FitOptions::Check() const {
       << "FitOptions.em_box_margin must be >= 0";
   SAMP_CHECK(min_points_per_frame >= 1) << "FitOptions.min_points_per_frame must be >= 1";
   SAMP_CHECK(positive(huber_threshold)) << "FitOptions.huber_threshold must be > 0";
+  SAMP_CHECK(positive(correlation_area_px)) << "FitOptions.correlation_area_px must be > 0";
+  SAMP_CHECK(positive(silhouette_sigma_px)) << "FitOptions.silhouette_sigma_px must be > 0";
+  SAMP_CHECK(positive(outlier_threshold)) << "FitOptions.outlier_threshold must be > 0";
   SAMP_CHECK(positive(sigma_ground)) << "FitOptions.sigma_ground must be > 0";
   SAMP_CHECK(std::isfinite(shape_prior_weight) && shape_prior_weight >= 0.0)
       << "FitOptions.shape_prior_weight must be >= 0";
@@ -324,13 +410,24 @@ class StopAfterRejectedSteps : public ceres::IterationCallback {
   int rejected_ = 0;
 };
 
-SdfCostOptions DataTermOptions(const TrackFrame& f, const FitOptions& options, double weight) {
+SdfCostOptions DataTermOptions(const Track& track, const TrackFrame& f, const FitOptions& options, double weight) {
   SdfCostOptions o;
   o.huber_threshold = options.huber_threshold;
   o.weight = weight;
-  o.ray_depth_inside = options.ray_depth_inside;
+  o.term = options.data_term;
   o.camera_in_world = f.world_from_camera.translation();
+  o.camera_axis_in_world = f.world_from_camera.linear().col(2).normalized();
+  o.focal_px = track.calibration.camera.fx;
+  o.silhouette_sigma_px = options.silhouette_sigma_px;
+  o.outlier_threshold = options.outlier_threshold;
   return o;
+}
+
+// Effective number of independent observations of a frame's n associated
+// points (docs/fitting.md, "Prior/data balance").
+double EffectivePoints(const TrackFrame& f, int n, const FitOptions& options) {
+  if (options.data_weighting == DataWeighting::kMean) return double(n);
+  return std::min(double(n), n * f.candidate_pixels_per_point / options.correlation_area_px);
 }
 
 SolveReport Solve(const ShapeLookup& lookup, const Track& track,
@@ -338,7 +435,10 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
                   const FitOptions& options, FitState* state) {
   const int num_frames = int(track.frames.size());
   const bool single = options.single_frame;
-  const double frame_weight = 1.0 / num_frames;
+  // kMean: the paper's E = (1/T) sum_t [E_data,t (a mean over points) + ...] + E_shape;
+  // kEffective: the negative log-posterior, every frame and point counted.
+  const bool mean = options.data_weighting == DataWeighting::kMean;
+  const double frame_weight = mean ? 1.0 / num_frames : 1.0;
   ceres::Problem::Options problem_options;
   problem_options.cost_function_ownership = ceres::TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
@@ -359,7 +459,9 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
     if (int(data[k].points.size()) >= options.min_points_per_frame) {
       std::vector<double> sigmas = data[k].sigmas;
       for (double& s : sigmas) s *= sigma_scale;
-      const SdfCostOptions cost_options = DataTermOptions(f, options, frame_weight);
+      const double data_weight =
+          mean ? frame_weight : EffectivePoints(f, int(data[k].points.size()), options);
+      const SdfCostOptions cost_options = DataTermOptions(track, f, options, data_weight);
       ceres::CostFunction* cost =
           options.compress_data_blocks ? CompressedSdfCost::Create(&lookup, data[k].points, sigmas, cost_options)
                                        : SdfCost::Create(&lookup, data[k].points, sigmas, cost_options);
@@ -423,7 +525,7 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
 
 TrackFit TrackFitter::Fit(const Track& track) const {
   const auto start = std::chrono::steady_clock::now();
-  CheckTrack(track, options_);
+  CheckTrack(track);
   const std::string name = "track " + std::to_string(track.id) +
                            (track.sequence.empty() ? "" : " of sequence " + track.sequence);
   const int num_frames = int(track.frames.size());
@@ -440,7 +542,7 @@ TrackFit TrackFitter::Fit(const Track& track) const {
   std::vector<Association> data(num_frames);
   int frames_with_data = 0;
   for (int k = 0; k < num_frames; ++k) {
-    data[k] = AssociateByDetection(track.frames[k], options_.association_radius);
+    data[k] = AssociateByDetection(track.frames[k], options_.association_radius, options_.data_term);
     frames_with_data += int(data[k].points.size()) >= options_.min_points_per_frame;
   }
   SAMP_CHECK(frames_with_data > 0) << name << " has no frame with >= " << options_.min_points_per_frame
@@ -459,16 +561,38 @@ TrackFit TrackFitter::Fit(const Track& track) const {
     std::vector<AlignedBox> boxes(state.codes.size());
     for (size_t c = 0; c < state.codes.size(); ++c) boxes[c] = lookup_.InsideBox(state.codes[c]);
     std::vector<Association> refined(num_frames);
+    std::vector<std::string> notes;
     int refined_frames = 0;
     for (int k = 0; k < num_frames; ++k) {
       const int c = single ? k : 0;
-      if (boxes[c].IsEmpty()) continue;
-      refined[k] = AssociateByFit(track.frames[k], lookup_, state.codes[c], state.poses[k], boxes[c], options_);
-      refined_frames += int(refined[k].points.size()) >= options_.min_points_per_frame;
+      std::string why;
+      if (options_.data_term == DataTerm::kDisparity) {
+        refined[k] = AssociateByResiduals(track, track.frames[k], lookup_, state.codes[c], state.poses[k],
+                                          options_, &why);
+      } else if (boxes[c].IsEmpty()) {
+        why = "the fitted shape is empty (phi_z >= 0 everywhere)";
+      } else {
+        refined[k] =
+            AssociateByFit(track.frames[k], lookup_, state.codes[c], state.poses[k], boxes[c], options_, &why);
+      }
+      if (int(refined[k].points.size()) >= options_.min_points_per_frame) {
+        ++refined_frames;
+      } else {
+        notes.push_back("frame " + std::to_string(track.frames[k].frame) + ": " + why);
+      }
     }
+    fit.summary.association_notes.insert(fit.summary.association_notes.end(), notes.begin(), notes.end());
     if (refined_frames == 0) {
-      LogWarning() << name << ": EM association found no points; keeping the detection association";
+      std::ostringstream message;
+      message << name << ": EM association kept fewer than " << options_.min_points_per_frame
+              << " points in every frame; keeping the detection association. Per frame:";
+      for (const std::string& note : notes) message << "\n  " << note;
+      LogWarning() << message.str();
       break;
+    }
+    if (!notes.empty()) {
+      LogInfo() << name << ": EM association: " << notes.size() << " of " << num_frames
+                << " frame(s) without data term (first: " << notes.front() << ")";
     }
     data = std::move(refined);
     fit.summary.solves.push_back(Solve(lookup_, track, data, 1.0, options_, &state));
@@ -506,7 +630,8 @@ TrackFit TrackFitter::Fit(const Track& track) const {
     }
     if (out.num_points > 0) {
       // The data term as optimised (weight 1: the mean of rho over the points).
-      const SdfCost cost(&lookup_, data[k].points, data[k].sigmas, DataTermOptions(f, options_, 1.0));
+      out.effective_points = EffectivePoints(f, out.num_points, options_);
+      const SdfCost cost(&lookup_, data[k].points, data[k].sigmas, DataTermOptions(track, f, options_, 1.0));
       std::vector<double> residuals(data[k].points.size());
       cost.EvaluateRows(z.data(), state.poses[k].data(), 0, cost.num_residuals(), residuals.data(), nullptr, 0,
                         nullptr, 0);

@@ -13,10 +13,16 @@
 
 #include "libsamp/core/mesh.h"
 #include "libsamp/fit/motion_model.h"
+#include "libsamp/fit/sdf_cost.h"
 #include "libsamp/model/shape_lookup.h"
 #include "libsamp/data/track.h"
 
 namespace samp {
+
+// Weighting of the data term against the priors (FitOptions::data_weighting).
+enum class DataWeighting { kMean, kEffective };
+const char* DataWeightingName(DataWeighting weighting);  // "mean", "effective"
+DataWeighting ParseDataWeighting(const std::string& name);  // throws samp::Error for an unknown name
 
 struct FitOptions {
   // Single-frame mode: independent shape and pose per frame, no motion term.
@@ -36,12 +42,25 @@ struct FitOptions {
   // Data blocks compressed to R + 5 residuals with the same cost, gradient and
   // Gauss-Newton matrix (CompressedSdfCost; much faster); false = N residuals.
   bool compress_data_blocks = true;
-  // Huber threshold of the data term, in units of sigma_d.
+  // Data term (sdf_cost.h): kDisparity (default) compares each point's
+  // disparity with that of the shape's visible surface on its viewing ray
+  // (unbiased under stereo noise, robust mixture); kPaper = phi at the point
+  // (SAMP); kRayDepth = the distance along the ray ("--ray-depth-inside").
+  DataTerm data_term = DataTerm::kDisparity;
+  // How a frame's data term is weighted against the priors (docs/fitting.md,
+  // "Prior/data balance"): kEffective = each frame counts its effective
+  // number of independent observations N_eff = N pixels_per_point /
+  // correlation_area_px (the negative log-posterior), motion and ground terms
+  // count once per frame; kMean = the paper's (1/T) sum_t (1/N_t) sum_i.
+  DataWeighting data_weighting = DataWeighting::kEffective;
+  // Image area (px) over which stereo errors are correlated (kEffective).
+  double correlation_area_px = 16.0;
+  // Huber threshold of the kPaper / kRayDepth data terms, in units of sigma_d.
   double huber_threshold = 1.0;
-  // Data term: measure points inside the shape by their depth below the
-  // visible surface along the viewing ray rather than by phi (sdf_cost.h;
-  // removes the pull towards the camera under large stereo noise).
-  bool ray_depth_inside = false;
+  // kDisparity: silhouette uncertainty of rays that miss the shape, px; the
+  // inlier/outlier threshold s_0 of the mixture, in sigma (also the EM gate).
+  double silhouette_sigma_px = 2.0;
+  double outlier_threshold = 3.0;
   // Standard deviation of the car's height above that frame's road plane, m.
   double sigma_ground = 0.1;
   // Weight lambda of the shape prior lambda sum (z_i / sigma_i)^2.
@@ -92,6 +111,9 @@ struct SolveReport {
 
 struct FitSummary {
   std::vector<SolveReport> solves;  // initial solve, then one per EM iteration
+  // Frames whose EM association kept fewer than min_points_per_frame points,
+  // one line each with the reason ("frame 7: 3 of 812 candidates kept: ...").
+  std::vector<std::string> association_notes;
   double initial_cost = 0.0;        // first solve, before
   double final_cost = 0.0;          // last solve, after
   int num_iterations = 0;           // summed over solves
@@ -111,6 +133,7 @@ struct FrameFit {
   // (frame 0 and single-frame mode: "none").
   std::string motion_model = "none";
   int num_points = 0;                                   // associated in the last solve
+  double effective_points = 0.0;                        // N_eff of the last solve (kEffective), else num_points
   double data_cost = 0.0;                               // (1/N) sum rho(s_i) at the solution
   std::vector<Eigen::Vector3d> points_in_world;         // when options.keep_points
   Eigen::VectorXd shape_code;                           // single-frame mode only

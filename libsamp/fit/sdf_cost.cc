@@ -3,6 +3,7 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <mutex>
 
 #include "libsamp/core/error.h"
@@ -18,12 +19,46 @@ constexpr int kMaxMarchSteps = 24;
 constexpr int kNewtonSteps = 3;
 constexpr double kMaxRayRatio = 5.0;
 constexpr double kMinRaySlope = 0.05;
+// First crossing (kDisparity): at most this many sphere-tracing steps from
+// the grid box entry; golden-section steps refining a miss's closest approach.
+constexpr int kMaxTraceSteps = 64;
+constexpr int kGoldenSteps = 16;
 
 }  // namespace
 
+const char* DataTermName(DataTerm term) {
+  switch (term) {
+    case DataTerm::kPaper: return "paper";
+    case DataTerm::kRayDepth: return "ray-depth";
+    case DataTerm::kDisparity: return "disparity";
+  }
+  return "?";
+}
+
+DataTerm ParseDataTerm(const std::string& name) {
+  for (DataTerm t : {DataTerm::kPaper, DataTerm::kRayDepth, DataTerm::kDisparity}) {
+    if (name == DataTermName(t)) return t;
+  }
+  SAMP_THROW() << "unknown data term '" << name << "' (paper, ray-depth, disparity)";
+}
+
+double SdfCost::MixturePsi(double s, double s0, double* d_psi) {
+  const double c = std::exp(-0.5 * s0 * s0);
+  const double e = std::exp(-0.5 * s * s);
+  if (s == 0.0) {
+    if (d_psi) *d_psi = 1.0 / std::sqrt(1.0 + c);
+    return 0.0;
+  }
+  // rho = -2 log((e + c) / (1 + c)) = 2 log1p((1 - e) / (e + c)), stable for small s.
+  const double rho = 2.0 * std::log1p(-std::expm1(-0.5 * s * s) / (e + c));
+  const double root = std::sqrt(rho);
+  if (d_psi) *d_psi = root > 0.0 ? std::abs(s) * e / ((e + c) * root) : 1.0 / std::sqrt(1.0 + c);
+  return s > 0.0 ? root : -root;
+}
+
 SdfCost::SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
                  const std::vector<double>& sigmas, const SdfCostOptions& options)
-    : lookup_(lookup), huber_(options.huber_threshold) {
+    : lookup_(lookup), term_(options.term), huber_(options.huber_threshold) {
   SAMP_CHECK(lookup != nullptr) << "SdfCost: null shape lookup";
   SAMP_CHECK(!points_in_world.empty()) << "SdfCost: no points";
   SAMP_CHECK(points_in_world.size() == sigmas.size())
@@ -42,12 +77,33 @@ SdfCost::SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& 
     for (int a = 0; a < 3; ++a) points_[3 * i + a] = points_in_world[i][a];
     inv_sigmas_[i] = 1.0 / sigmas[i];
   }
-  if (options.ray_depth_inside) {
+  camera_ = options.camera_in_world;
+  outlier_threshold_ = options.outlier_threshold;
+  if (term_ != DataTerm::kPaper) {
     rays_.resize(3 * n);
     for (size_t i = 0; i < n; ++i) {
       const Eigen::Vector3d ray = points_in_world[i] - options.camera_in_world;
       SAMP_CHECK(ray.norm() > 0.0) << "SdfCost: point " << i << " is at the camera centre";
       for (int a = 0; a < 3; ++a) rays_[3 * i + a] = ray[a] / ray.norm();
+    }
+  }
+  if (term_ == DataTerm::kDisparity) {
+    SAMP_CHECK(options.focal_px > 0.0 && std::isfinite(options.focal_px))
+        << "SdfCost: focal_px must be > 0 for the disparity term, got " << options.focal_px;
+    SAMP_CHECK(options.silhouette_sigma_px > 0.0) << "SdfCost: silhouette_sigma_px must be > 0";
+    SAMP_CHECK(options.outlier_threshold > 0.0) << "SdfCost: outlier_threshold must be > 0";
+    SAMP_CHECK(std::abs(options.camera_axis_in_world.norm() - 1.0) < 1e-6)
+        << "SdfCost: camera_axis_in_world must be a unit vector";
+    ray_lengths_.resize(n);
+    axis_cosines_.resize(n);
+    inv_silhouette_sigmas_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      const Eigen::Vector3d ray = points_in_world[i] - options.camera_in_world;
+      ray_lengths_[i] = ray.norm();
+      axis_cosines_[i] = ray.dot(options.camera_axis_in_world) / ray_lengths_[i];
+      SAMP_CHECK(axis_cosines_[i] > 1e-3) << "SdfCost: point " << i << " is not in front of the camera";
+      const double depth = axis_cosines_[i] * ray_lengths_[i];
+      inv_silhouette_sigmas_[i] = options.focal_px / (depth * options.silhouette_sigma_px);
     }
   }
   set_num_residuals(int(n));
@@ -68,6 +124,34 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, int begin, int e
   const int nr = lookup_->num_components();
   const double c = std::cos(pose[3]), s = std::sin(pose[3]);
   const double* phi_z = lookup_->DenseCached(z);
+  if (term_ == DataTerm::kDisparity) {
+    // The camera centre in the object frame.
+    const double dx = camera_[0] - pose[0], dy = camera_[1] - pose[1], dz = camera_[2] - pose[2];
+    const double o_cam[3] = {c * dx - s * dz, dy, s * dx + c * dz};
+    for (int row = 0; row < end - begin; ++row) {
+      const int i = begin + row;
+      const double* w = &rays_[3 * i];
+      const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
+      double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
+      double m, o[3], g[3];
+      const RayResidual ray = DisparityResidual(i, phi_z, o_cam, u, &m, o, jp ? g : nullptr, dz_row);
+      if (!std::isfinite(ray.value)) return false;
+      double d_psi = 1.0;
+      residuals[row] = sqrt_weight_ * MixturePsi(ray.value, outlier_threshold_, &d_psi);
+      const double f = sqrt_weight_ * d_psi * m;
+      if (dz_row) {
+        for (int r = 0; r < nr; ++r) dz_row[r] *= f;
+      }
+      if (jp) {
+        double* p = jp + size_t(row) * jp_stride;
+        p[0] = -f * (c * g[0] + s * g[2]);
+        p[1] = -f * g[1];
+        p[2] = -f * (-s * g[0] + c * g[2]);
+        p[3] = f * (-g[0] * o[2] + g[2] * o[0]);
+      }
+    }
+    return true;
+  }
   for (int row = 0; row < end - begin; ++row) {
     const int i = begin + row;
     const double dx = points_[3 * i] - pose[0];
@@ -159,6 +243,156 @@ bool SdfCost::RayDistance(const double* phi_z, const double* o, double phi_o, co
   if (!(g_c[0] * u[0] + g_c[1] * u[1] + g_c[2] * u[2] < -kMinRaySlope)) return false;
   *distance = d;
   return true;
+}
+
+bool SdfCost::FirstCrossing(const double* phi_z, const double* o_cam, const double* u, double* lambda, double* c,
+                            double* g_c, double* phi_min) const {
+  const GridSpec& grid = lookup_->grid();
+  const Eigen::Vector3d lo = grid.MinCorner(), hi = grid.MaxCorner();
+  auto at = [&](double l, double* p) {
+    for (int a = 0; a < 3; ++a) p[a] = o_cam[a] + l * u[a];
+  };
+  auto phi_at = [&](double l) {
+    double p[3];
+    at(l, p);
+    return lookup_->EvaluateDense(phi_z, p, nullptr, nullptr);
+  };
+  auto finish_miss = [&](double l) {
+    *lambda = l;
+    at(l, c);
+    *phi_min = lookup_->EvaluateDense(phi_z, c, g_c, nullptr);
+    return false;
+  };
+  // Slab intersection with the grid box.
+  double enter = 0.0, leave = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(u[a]) < 1e-12) {
+      if (o_cam[a] < lo[a] || o_cam[a] > hi[a]) enter = leave + 1.0;
+      continue;
+    }
+    double t0 = (lo[a] - o_cam[a]) / u[a], t1 = (hi[a] - o_cam[a]) / u[a];
+    if (t0 > t1) std::swap(t0, t1);
+    enter = std::max(enter, t0);
+    leave = std::min(leave, t1);
+  }
+  if (!(enter <= leave)) {
+    // The ray passes the grid box: its closest approach to the box centre.
+    const Eigen::Vector3d centre = 0.5 * (lo + hi);
+    double l = 0.0;
+    for (int a = 0; a < 3; ++a) l += (centre[a] - o_cam[a]) * u[a];
+    return finish_miss(std::max(l, 0.0));
+  }
+  // Sphere tracing from the entry: |phi| bounds the distance to the surface.
+  const double min_step = 0.5 * grid.voxel_size;
+  double ls[kMaxTraceSteps + 1], vs[kMaxTraceSteps + 1];
+  int count = 0;
+  double l = enter;
+  for (;;) {
+    const double v = phi_at(l);
+    if (!std::isfinite(v)) {
+      *phi_min = v;
+      return false;
+    }
+    ls[count] = l;
+    vs[count] = v;
+    ++count;
+    if (v < 0.0) break;
+    if (l >= leave || count > kMaxTraceSteps) break;
+    l = std::min(l + std::max(v, min_step), leave);
+  }
+  if (vs[count - 1] < 0.0 && count >= 2) {
+    // Crossing bracketed in [ls[count-2], ls[count-1]]: secant, then Newton
+    // steps kept inside the bracket.
+    const double a_lo = ls[count - 2], a_hi = ls[count - 1];
+    const double v_lo = vs[count - 2], v_hi = vs[count - 1];
+    double d = a_lo + (a_hi - a_lo) * v_lo / (v_lo - v_hi);
+    const double tolerance = 1e-9 * grid.voxel_size;
+    double v = 0.0, slope = 0.0;
+    for (int k = 0;; ++k) {
+      at(d, c);
+      v = lookup_->EvaluateDense(phi_z, c, g_c, nullptr);
+      slope = g_c[0] * u[0] + g_c[1] * u[1] + g_c[2] * u[2];
+      if (k == kNewtonSteps || std::abs(v) <= tolerance || slope == 0.0 || !std::isfinite(slope)) break;
+      d = std::min(std::max(d - v / slope, a_lo), a_hi);
+    }
+    *lambda = d;
+    *phi_min = v;
+    return true;  // the caller clamps a grazing slope
+  }
+  if (vs[count - 1] < 0.0) return finish_miss(ls[0]);  // inside at the box entry (a shape touching the box)
+  // Miss: the smallest sampled phi, refined by golden-section search in the
+  // neighbouring samples' interval.
+  int best = 0;
+  for (int k = 1; k < count; ++k) {
+    if (vs[k] < vs[best]) best = k;
+  }
+  double a = ls[std::max(best - 1, 0)], b = ls[std::min(best + 1, count - 1)];
+  if (b > a) {
+    constexpr double kInvPhi = 0.6180339887498949;
+    double x1 = b - kInvPhi * (b - a), x2 = a + kInvPhi * (b - a);
+    double f1 = phi_at(x1), f2 = phi_at(x2);
+    for (int k = 0; k < kGoldenSteps; ++k) {
+      if (f1 < f2) {
+        b = x2;
+        x2 = x1;
+        f2 = f1;
+        x1 = b - kInvPhi * (b - a);
+        f1 = phi_at(x1);
+      } else {
+        a = x1;
+        x1 = x2;
+        f1 = f2;
+        x2 = a + kInvPhi * (b - a);
+        f2 = phi_at(x2);
+      }
+    }
+    const double x = f1 < f2 ? x1 : x2;
+    if (std::min(f1, f2) < vs[best]) return finish_miss(x);
+  }
+  return finish_miss(ls[best]);
+}
+
+RayResidual SdfCost::DisparityResidual(int i, const double* phi_z, const double* o_cam, const double* u, double* m,
+                                       double* c, double* g, double* dz_row) const {
+  RayResidual out;
+  double lambda = 0.0, g_c[3], phi_min = 0.0;
+  out.hit = FirstCrossing(phi_z, o_cam, u, &lambda, c, g_c, &phi_min);
+  if (out.hit) {
+    const double li = ray_lengths_[i], a = axis_cosines_[i], inv_sigma = inv_sigmas_[i];
+    double slope = g_c[0] * u[0] + g_c[1] * u[1] + g_c[2] * u[2];
+    if (!(slope < -kMinRaySlope)) {
+      // Grazing: the crossing moves fast with the parameters; its derivative
+      // is taken with the slope clamped (a Gauss-Newton approximation).
+      out.grazing = true;
+      slope = -kMinRaySlope;
+    }
+    out.value = a * li * (lambda - li) / lambda * inv_sigma;
+    *m = -a * li * li / (lambda * lambda) * inv_sigma / slope;
+  } else {
+    out.value = phi_min * inv_silhouette_sigmas_[i];
+    *m = inv_silhouette_sigmas_[i];
+  }
+  if (g) {
+    for (int k = 0; k < 3; ++k) g[k] = g_c[k];
+  }
+  if (dz_row) lookup_->EvaluateDense(phi_z, c, nullptr, dz_row);
+  return out;
+}
+
+std::vector<RayResidual> SdfCost::RayResiduals(const double* z, const double* pose) const {
+  SAMP_CHECK(term_ == DataTerm::kDisparity) << "SdfCost::RayResiduals needs the disparity term";
+  const double c = std::cos(pose[3]), s = std::sin(pose[3]);
+  const double* phi_z = lookup_->DenseCached(z);
+  const double dx = camera_[0] - pose[0], dy = camera_[1] - pose[1], dz = camera_[2] - pose[2];
+  const double o_cam[3] = {c * dx - s * dz, dy, s * dx + c * dz};
+  std::vector<RayResidual> out(static_cast<size_t>(num_residuals()));
+  for (int i = 0; i < num_residuals(); ++i) {
+    const double* w = &rays_[3 * i];
+    const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
+    double m, o[3];
+    out[size_t(i)] = DisparityResidual(i, phi_z, o_cam, u, &m, o, nullptr, nullptr);
+  }
+  return out;
 }
 
 CompressedSdfCost::CompressedSdfCost(const ShapeLookup* lookup,

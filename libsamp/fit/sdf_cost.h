@@ -31,6 +31,41 @@
 // differentiation of phi_z(c) = 0 (m = -1 / (grad phi(c) . u), clamped to
 // <= 1 / 0.2), the Jacobians are those of phi above taken at c (with c in the
 // d/dtheta term) and multiplied by m.
+//
+// Data term kDisparity (the fitter's default, docs/fitting.md): every point
+// is compared with the shape's visible surface on its own viewing ray, in
+// disparity. The ray from the camera centre through the point, in the object
+// frame c(lambda) = o_cam + lambda u (u unit, lambda the distance from the
+// camera), enters the grid box at lambda_in; sphere tracing from there finds
+// the first crossing lambda_s (phi_z(c(lambda_s)) = 0, phi < 0 behind it):
+// the surface the camera sees on that pixel. With the point's distance
+// lambda_i, a_i = u . (optical axis) (depth z = a lambda) and sigma_i the
+// depth noise sigma_d = z^2 sigma_disp / (b f):
+//   hit:  s_i = b f (1/z_i - 1/z_s) / sigma_disp
+//             = a_i lambda_i (lambda_s - lambda_i) / (lambda_s sigma_i)
+// the disparity error in units of sigma_disp (b f cancels): homoscedastic,
+// unbiased for stereo noise, positive in front of the surface, negative
+// behind it (inside the car or beyond). Derivatives by implicit
+// differentiation of phi_z(c(lambda_s)) = 0:
+//   d lambda_s = -(d phi at c, lambda fixed) / (grad phi(c) . u)
+//   d s_i / d lambda_s = a_i lambda_i^2 / (lambda_s^2 sigma_i)
+// and "d phi at c, lambda fixed" is the point Jacobian above taken at the
+// world point of c. At a grazing crossing (grad phi . u > -0.05) the slope is
+// clamped to -0.05 in the derivative (Gauss-Newton approximation).
+//   miss: the ray passes the shape. s_i = d_i / sigma_sil,i with d_i =
+// min_lambda phi_z(c(lambda)) over the grid box (the ray's clearance of the
+// silhouette; lambda* by the sampled minimum refined with a parabola) and
+// sigma_sil,i = z_i silhouette_sigma_px / f (the silhouette's image-space
+// uncertainty). By the envelope theorem d d_i = d phi at c(lambda*),
+// lambda* fixed.
+// Robust likelihood: the point is the surface's disparity plus Gaussian noise
+// with probability 1 - eps, or belongs to something else (background behind
+// the car, an occluder in front, a wrong match) with a flat density; the
+// negative log-likelihood, shifted to 0 at s = 0, is
+//   rho(s) = -2 log((exp(-s^2/2) + c) / (1 + c)),  c = exp(-s_0^2 / 2)
+// (s_0 = outlier_threshold: where the two components are equally likely;
+// rho -> rho_max = -2 log(c / (1 + c)) beyond it, so clutter and occluders
+// add a constant). Residual r_i = sqrt(w / N) psi(s_i), psi = sign(s) sqrt(rho).
 #pragma once
 
 #include <ceres/cost_function.h>
@@ -38,19 +73,43 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <mutex>
+#include <string>
 #include <vector>
 
 #include "libsamp/model/shape_lookup.h"
 
 namespace samp {
 
+// Which residual a point contributes (see above).
+enum class DataTerm {
+  kPaper,      // phi_z at the point / sigma_d, Huber (SAMP Section 3.2)
+  kRayDepth,   // distance along the viewing ray to the surface, Huber ("ray_depth_inside")
+  kDisparity,  // disparity of the point vs that of the visible surface on its ray, robust mixture
+};
+const char* DataTermName(DataTerm term);  // "paper", "ray-depth", "disparity"
+// Throws samp::Error for an unknown name.
+DataTerm ParseDataTerm(const std::string& name);
+
 struct SdfCostOptions {
-  double huber_threshold = 1.0;  // k, in units of sigma
-  double weight = 1.0;           // w (1 / T for one frame of a T-frame track)
-  // Inside points by their depth along the viewing ray from camera_in_world
-  // (see above); off: phi everywhere, as the paper.
-  bool ray_depth_inside = false;
+  double huber_threshold = 1.0;  // k, in units of sigma (kPaper, kRayDepth)
+  double weight = 1.0;           // w: the block's cost is w times the mean of rho over its points
+  DataTerm term = DataTerm::kPaper;
+  // Camera centre of the frame (kRayDepth, kDisparity) and its optical axis
+  // (unit, world; kDisparity: depth z = distance along the ray times u . axis).
   Eigen::Vector3d camera_in_world = Eigen::Vector3d::Zero();
+  Eigen::Vector3d camera_axis_in_world = Eigen::Vector3d::UnitZ();
+  // kDisparity: focal length (px) and silhouette uncertainty (px) of rays
+  // that miss the shape; s_0 of the mixture, in units of sigma.
+  double focal_px = 0.0;
+  double silhouette_sigma_px = 2.0;
+  double outlier_threshold = 3.0;
+};
+
+// Per-point classification of the kDisparity term (EM association, reports).
+struct RayResidual {
+  bool hit = false;     // the ray meets the shape
+  bool grazing = false; // ... at a grazing angle (derivative with a clamped slope)
+  double value = 0.0;   // s_i before the robustifier (hit: disparity error / sigma_disp; miss: clearance / sigma_sil)
 };
 
 class SdfCost : public ceres::CostFunction {
@@ -79,6 +138,13 @@ class SdfCost : public ceres::CostFunction {
   bool EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals, double* jz,
                     int jz_stride, double* jp, int jp_stride) const;
 
+  // kDisparity: s_i of every point at (z, pose), before the robustifier.
+  std::vector<RayResidual> RayResiduals(const double* z, const double* pose) const;
+
+  // The mixture robustifier of kDisparity: psi(s) = sign(s) sqrt(rho(s)),
+  // rho(s) = -2 log((exp(-s^2/2) + c) / (1 + c)), c = exp(-s0^2/2); and d psi / ds.
+  static double MixturePsi(double s, double s0, double* d_psi);
+
   // The Huber robustifier psi and its derivative (exposed for tests).
   static double Psi(double s, double k, double* d_psi) {
     const double a = std::abs(s);
@@ -99,9 +165,27 @@ class SdfCost : public ceres::CostFunction {
   bool RayDistance(const double* phi_z, const double* o, double phi_o, const double* u, double* distance,
                    double* c, double* g_c) const;
 
+  // kDisparity: the first crossing of the ray o_cam + lambda u (object frame)
+  // with the surface, from the grid box entry. Hit: *lambda = lambda_s, c and
+  // grad phi at c, true. Miss: *lambda = lambda* of the smallest phi along
+  // the ray (c, g_c there, *phi_min = phi(c)), false.
+  bool FirstCrossing(const double* phi_z, const double* o_cam, const double* u, double* lambda, double* c,
+                     double* g_c, double* phi_min) const;
+  // kDisparity residual of point i: s_i, the factor m with d s_i = m (d phi
+  // at c), c (object frame) and, when g / dz_row are given, grad phi and
+  // d phi / dz at c.
+  RayResidual DisparityResidual(int i, const double* phi_z, const double* o_cam, const double* u, double* m,
+                                double* c, double* g, double* dz_row) const;
+
   const ShapeLookup* lookup_;
+  DataTerm term_ = DataTerm::kPaper;
   std::vector<double> points_;  // 3 per point
-  std::vector<double> rays_;    // 3 per point (unit, world), ray_depth_inside only
+  std::vector<double> rays_;    // 3 per point (unit, world), kRayDepth and kDisparity
+  std::vector<double> ray_lengths_;  // lambda_i, kDisparity
+  std::vector<double> axis_cosines_; // a_i = u . optical axis, kDisparity
+  std::vector<double> inv_silhouette_sigmas_;  // 1 / sigma_sil,i, kDisparity
+  Eigen::Vector3d camera_ = Eigen::Vector3d::Zero();
+  double outlier_threshold_ = 3.0;
   std::vector<double> inv_sigmas_;  // 1 / sigma_i
   double huber_ = 1.0;
   double sqrt_weight_ = 1.0;    // sqrt(w / N)

@@ -115,6 +115,7 @@ nlohmann::json TrackFitToJson(const TrackFit& fit, const AlignedBox& box) {
     jf["yaw_rate"] = f.yaw_rate;
     jf["motion_model"] = f.motion_model;
     jf["num_points"] = f.num_points;
+    jf["effective_points"] = f.effective_points;
     jf["data_cost"] = f.data_cost;
     if (fit.single_frame) jf["shape_code"] = Vec(f.shape_code);
     frames.push_back(jf);
@@ -126,6 +127,7 @@ nlohmann::json TrackFitToJson(const TrackFit& fit, const AlignedBox& box) {
   s["num_iterations"] = fit.summary.num_iterations;
   s["seconds"] = fit.summary.seconds;
   s["usable"] = fit.summary.usable;
+  s["association_notes"] = fit.summary.association_notes;
   nlohmann::json solves = nlohmann::json::array();
   for (const SolveReport& r : fit.summary.solves) {
     solves.push_back({{"initial_cost", r.initial_cost},
@@ -158,7 +160,11 @@ nlohmann::json FitOptionsToJson(const FitOptions& o) {
   j["standing_speed"] = o.standing_speed;
   j["max_motion_off_axis"] = o.max_motion_off_axis;
   j["min_speed_significance"] = o.min_speed_significance;
-  j["ray_depth_inside"] = o.ray_depth_inside;
+  j["data_term"] = DataTermName(o.data_term);
+  j["data_weighting"] = DataWeightingName(o.data_weighting);
+  j["correlation_area_px"] = o.correlation_area_px;
+  j["silhouette_sigma_px"] = o.silhouette_sigma_px;
+  j["outlier_threshold"] = o.outlier_threshold;
   j["straight_yaw_rate"] = o.straight_yaw_rate;
   j["motion_noise"] = {{"speed_noise", o.motion_noise.speed_noise},
                        {"yaw_rate_noise", o.motion_noise.yaw_rate_noise},

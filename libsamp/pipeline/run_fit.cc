@@ -226,6 +226,7 @@ RunFitSummary RunFit(const RunFitOptions& options) {
        {{"box_margin", so.observations.box_margin},
         {"min_height_above_road", so.observations.min_height_above_road},
         {"max_distance_to_detection", so.observations.max_distance_to_detection},
+        {"depth_gate_sigmas", so.observations.depth_gate_sigmas},
         {"min_disparity_px", so.observations.min_disparity_px},
         {"sigma_disparity_px", so.observations.sigma_disparity_px},
         {"max_points_per_frame", so.observations.max_points_per_frame},

@@ -4,7 +4,9 @@
 //                             blocks compressed to R + 5 rows, the default)
 //   BM_Fit/em:1/compressed:1  with the hard-EM pass (re-association + second solve)
 //   BM_Fit/.../compressed:0   the per-frame blocks with N rows
-//   BM_Fit/.../ray:1          the data term along the viewing ray (--ray-depth-inside)
+//   BM_Fit/.../term:N         data term: 0 = paper (with the paper's mean
+//                             weighting), 1 = ray-depth (likewise), 2 = disparity
+//                             (the default, effective weighting)
 //   BM_FitLinearSolver/<solver>  the single solve with other linear solvers
 //   BM_FitAutodiffPerPoint       the same single solve with one autodiff
 //                                cost block per point (for comparison)
@@ -74,11 +76,16 @@ void BM_Fit(benchmark::State& state) {
   FitOptions options;
   options.em_iterations = int(state.range(0));
   options.compress_data_blocks = state.range(1) != 0;
-  options.ray_depth_inside = state.range(2) != 0;
+  const DataTerm terms[] = {DataTerm::kPaper, DataTerm::kRayDepth, DataTerm::kDisparity};
+  options.data_term = terms[state.range(2)];
+  options.data_weighting =
+      options.data_term == DataTerm::kDisparity ? DataWeighting::kEffective : DataWeighting::kMean;
   RunFit(state, options);
 }
 BENCHMARK(BM_Fit)
-    ->ArgNames({"em", "compressed", "ray"})
+    ->ArgNames({"em", "compressed", "term"})
+    ->Args({0, 1, 2})
+    ->Args({1, 1, 2})
     ->Args({0, 1, 0})
     ->Args({1, 1, 0})
     ->Args({0, 0, 0})
@@ -90,6 +97,8 @@ BENCHMARK(BM_Fit)
 void BM_FitLinearSolver(benchmark::State& state) {
   FitOptions options;
   options.em_iterations = 0;
+  options.data_term = DataTerm::kPaper;  // comparable with the earlier figures
+  options.data_weighting = DataWeighting::kMean;
   const char* solvers[] = {"sparse_normal_cholesky", "dense_schur", "iterative_schur", "dense_qr"};
   options.linear_solver = solvers[state.range(0)];
   state.SetLabel(options.linear_solver);

@@ -122,10 +122,24 @@ TEST(ObservationsTest, DistanceGateAndRoadFilter) {
   ObservationOptions options;
   options.max_points_per_frame = 0;
   options.max_distance_to_detection = 1.2;
+  options.depth_gate_sigmas = 0.0;  // the sphere alone
   const int gated = ExtractObservations(disparity, c, options, 0, &frame);
   EXPECT_GT(gated, 0);
   const Eigen::Vector3d center = DetectionCenter(frame.detection);
   for (const Eigen::Vector3d& p : frame.candidate_points_in_world) ASSERT_LE((p - center).norm(), 1.2 + 1e-9);
+  // The depth gate adds points whose ray passes within 1.2 m of the centre and
+  // that lie within 1.2 m + 3 sigma_ray of it along the ray.
+  options.depth_gate_sigmas = 3.0;
+  const int depth_gated = ExtractObservations(disparity, c, options, 0, &frame);
+  EXPECT_GE(depth_gated, gated);
+  for (const Eigen::Vector3d& p : frame.candidate_points_in_world) {
+    const Eigen::Vector3d u = p.normalized();
+    const double along = center.dot(u);
+    ASSERT_LE((center - along * u).norm(), 1.2 + 1e-9);
+    const double sigma_ray = p.z() * p.z() / (c.baseline * c.camera.fx) / u.z();
+    ASSERT_LE(std::abs(p.norm() - along), 1.2 + 3.0 * sigma_ray + 1e-9);
+  }
+  options.depth_gate_sigmas = 0.0;
   options.max_distance_to_detection = 4.0;
   const int all = ExtractObservations(disparity, c, options, 0, &frame);
   EXPECT_GT(all, gated);

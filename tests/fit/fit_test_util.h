@@ -107,6 +107,32 @@ inline std::vector<Eigen::Vector3d> SampleSurface(const ShapeLookup& lookup,
   return out;
 }
 
+// Keeps the points (world) that the camera at `camera_in_world` sees: no
+// part of phi_z (placed by world_from_object) lies on the ray in front of
+// them (steps of 1 cm up to 3 m in front, 2 cm tolerance). Stereo sees only
+// the visible surface; points sampled on self-occluded parts would lie
+// behind it.
+inline void KeepVisible(const ShapeLookup& lookup, const Eigen::VectorXd& z, const Eigen::Isometry3d& world_from_object,
+                        const Eigen::Vector3d& camera_in_world, std::vector<Eigen::Vector3d>* points,
+                        std::vector<double>* sigmas) {
+  const Eigen::Isometry3d object_from_world = world_from_object.inverse();
+  size_t kept = 0;
+  for (size_t i = 0; i < points->size(); ++i) {
+    const Eigen::Vector3d p = (*points)[i];
+    const Eigen::Vector3d u = (p - camera_in_world).normalized();
+    bool visible = true;
+    for (double d = 0.02; d < 3.0 && visible; d += 0.01) {
+      visible = lookup.Evaluate(z, Eigen::Vector3d(object_from_world * Eigen::Vector3d(p - d * u))) >= 0.0;
+    }
+    if (!visible) continue;
+    (*points)[kept] = p;
+    (*sigmas)[kept] = (*sigmas)[i];
+    ++kept;
+  }
+  points->resize(kept);
+  sigmas->resize(kept);
+}
+
 struct Synthetic {
   Track track;
   Eigen::VectorXd z_true;
@@ -116,17 +142,22 @@ struct Synthetic {
 
 // A synthetic track of `num_frames` frames at 10 Hz seen from a static camera at the
 // world origin (world = camera), road plane y = 1.65.
+// `z_true` (R values; default (1.2, -0.8, 0.6, 0, -0.5) sigma) and the first
+// pose `start` (tx, ty, tz, theta; default (-4, 1.65, 14, 0.4)) may be given.
 inline Synthetic MakeTrack(const ShapeLookup& lookup, int num_frames, double speed, double yaw_rate,
-                    int points_per_frame, unsigned seed, int flipped_frame = -1) {
+                    int points_per_frame, unsigned seed, int flipped_frame = -1,
+                    const Eigen::VectorXd* z_true = nullptr, const Eigen::Vector4d* start = nullptr) {
   Synthetic s;
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
   s.z_true = Eigen::VectorXd(5);
   s.z_true << 1.2, -0.8, 0.6, 0.0, -0.5;
   s.z_true = s.z_true.cwiseProduct(lookup.sigmas());
+  if (z_true != nullptr) s.z_true = *z_true;
   s.track.id = 3;
   s.track.sequence = "synthetic";
   Eigen::Vector4d pose(-4.0, 1.65, 14.0, 0.4);
+  if (start != nullptr) pose = *start;
   Eigen::Vector2d vel(speed, yaw_rate);
   const MotionModel model = SelectMotionModel(speed, yaw_rate, 1e-9, 1e-9);
   for (int k = 0; k < num_frames; ++k) {

@@ -128,10 +128,25 @@ void RegisterFitCommand(CLI::App* app) {
   command->add_option("--huber", o.fit.huber_threshold, "Huber threshold of the data term, in sigma_d")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  command->add_flag("--ray-depth-inside,!--no-ray-depth-inside", o.fit.ray_depth_inside,
-                    "Data term: points inside the shape count by their depth below the visible surface along "
-                    "the viewing ray, not by the SDF (docs/fitting.md)")
-      ->capture_default_str();
+  auto data_term = std::make_shared<std::string>(DataTermName(o.fit.data_term));
+  command->add_option("--data-term", *data_term,
+                      "Data term: disparity (each point's disparity vs that of the shape's visible surface on "
+                      "its viewing ray, robust), paper (the SDF at the point, SAMP), ray-depth (the distance "
+                      "along the viewing ray) (docs/fitting.md)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"disparity", "paper", "ray-depth"}));
+  command->add_flag_callback("--ray-depth-inside", [data_term] { *data_term = "ray-depth"; },
+                             "Same as --data-term ray-depth");
+  auto weighting = std::make_shared<std::string>(DataWeightingName(o.fit.data_weighting));
+  command->add_option("--weighting", *weighting,
+                      "Data term against the priors: effective (each frame counts its effective number of "
+                      "independent observations) or mean (the paper's (1/T) sum_t mean over points)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"effective", "mean"}));
+  command->add_option("--correlation-area", o.fit.correlation_area_px,
+                      "Image area over which stereo errors are correlated (effective weighting), px")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
   command->add_option("--association-radius", o.fit.association_radius,
                       "Initial association: points within this distance of the detection, m")
       ->capture_default_str()
@@ -172,7 +187,9 @@ void RegisterFitCommand(CLI::App* app) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   AddCommonOptions(command);
-  command->callback([options, visuals] {
+  command->callback([options, visuals, data_term, weighting] {
+    options->fit.data_term = ParseDataTerm(*data_term);
+    options->fit.data_weighting = ParseDataWeighting(*weighting);
     SAMP_CHECK(options->link_only || !options->model_path.empty())
         << "no --model given and this build has no default model";
     SAMP_CHECK(!(options->link_only && (visuals->pictures || visuals->html)))
