@@ -80,8 +80,10 @@ int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& ca
       const double along = center_in_camera.dot(u);
       const double lateral_sq = std::max(0.0, center_in_camera.squaredNorm() - along * along);
       if (lateral_sq > max_distance_sq) continue;
+      // The noise at the detection's depth (not the point's: far background
+      // has sigma of tens of metres and would pass any gate).
       const double sigma_ray =
-          DepthSigma(p.point_in_camera.z(), options.sigma_disparity_px, calibration) / std::max(u.z(), 1e-3);
+          DepthSigma(center_in_camera.z(), options.sigma_disparity_px, calibration) / std::max(u.z(), 1e-3);
       if (std::abs(length - along) > options.max_distance_to_detection + options.depth_gate_sigmas * sigma_ray) {
         continue;
       }

@@ -23,8 +23,8 @@ struct ObservationOptions {
   double max_distance_to_detection = 4.0;
   // ... or, when its viewing ray passes within max_distance_to_detection of
   // the centre, within max_distance_to_detection + depth_gate_sigmas
-  // sigma_ray of it along the ray (sigma_ray = sigma_d / cos of the ray to
-  // the optical axis): far away the stereo noise along the ray (metres)
+  // sigma_ray of it along the ray (sigma_ray = sigma_d at the centre's depth
+  // / cos of the ray to the optical axis): far away the stereo noise along the ray (metres)
   // exceeds the sphere, which would cut it unevenly about a detection that is
   // itself off along the ray. 0 = the sphere alone.
   double depth_gate_sigmas = 3.0;

@@ -84,7 +84,10 @@ Association AssociateByDetection(const TrackFrame& f, double radius, DataTerm te
       const Eigen::Vector3d u = ray / length;
       const double along = (centre - camera).dot(u);
       const double lateral = ((centre - camera) - along * u).norm();
-      const double sigma_along = f.candidate_sigmas[i] / std::max(u.dot(axis), 1e-3);
+      // The noise at the centre's depth (sigma_d grows with z^2: the
+      // point's own sigma would let far background pass).
+      const double depth_ratio = (centre - camera).dot(axis) / std::max(ray.dot(axis), 1e-3);
+      const double sigma_along = f.candidate_sigmas[i] * depth_ratio * depth_ratio / std::max(u.dot(axis), 1e-3);
       keep = lateral <= radius && std::abs(length - along) <= radius + 3.0 * sigma_along;
     } else {
       keep = (p - centre).norm() <= radius;
@@ -413,6 +416,7 @@ class StopAfterRejectedSteps : public ceres::IterationCallback {
 SdfCostOptions DataTermOptions(const Track& track, const TrackFrame& f, const FitOptions& options, double weight) {
   SdfCostOptions o;
   o.huber_threshold = options.huber_threshold;
+  o.mixture_loss = options.mixture_loss;
   o.weight = weight;
   o.term = options.data_term;
   o.camera_in_world = f.world_from_camera.translation();

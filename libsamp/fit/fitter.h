@@ -42,21 +42,28 @@ struct FitOptions {
   // Data blocks compressed to R + 5 residuals with the same cost, gradient and
   // Gauss-Newton matrix (CompressedSdfCost; much faster); false = N residuals.
   bool compress_data_blocks = true;
-  // Data term (sdf_cost.h): kDisparity (default) compares each point's
-  // disparity with that of the shape's visible surface on its viewing ray
-  // (unbiased under stereo noise, robust mixture); kPaper = phi at the point
-  // (SAMP); kRayDepth = the distance along the ray ("--ray-depth-inside").
-  DataTerm data_term = DataTerm::kDisparity;
+  // Data term (sdf_cost.h): kRayDepth (default) = the distance along each
+  // point's viewing ray to the shape's surface ("--ray-depth-inside", with
+  // the mixture robustifier below); kPaper = phi at the point (SAMP);
+  // kDisparity compares each point's disparity with that of the shape's
+  // visible surface on its ray (robust mixture). Measured on the realistic
+  // street benchmark in docs/fitting.md ("Choosing the defaults").
+  DataTerm data_term = DataTerm::kRayDepth;
   // How a frame's data term is weighted against the priors (docs/fitting.md,
   // "Prior/data balance"): kEffective = each frame counts its effective
   // number of independent observations N_eff = N pixels_per_point /
   // correlation_area_px (the negative log-posterior), motion and ground terms
   // count once per frame; kMean = the paper's (1/T) sum_t (1/N_t) sum_i.
   DataWeighting data_weighting = DataWeighting::kEffective;
-  // Image area (px) over which stereo errors are correlated (kEffective).
-  double correlation_area_px = 16.0;
+  // Image area (px) over which stereo errors are correlated (kEffective):
+  // measured on SGBM car pixels by tools/stereo_error_correlation.py (median
+  // 78.5 px over 52 car-frames; docs/fitting.md).
+  double correlation_area_px = 80.0;
   // Huber threshold of the kPaper / kRayDepth data terms, in units of sigma_d.
   double huber_threshold = 1.0;
+  // kPaper / kRayDepth: the mixture robustifier (threshold outlier_threshold)
+  // instead of Huber (SdfCostOptions::mixture_loss).
+  bool mixture_loss = true;
   // kDisparity: silhouette uncertainty of rays that miss the shape, px; the
   // inlier/outlier threshold s_0 of the mixture, in sigma (also the EM gate).
   double silhouette_sigma_px = 2.0;

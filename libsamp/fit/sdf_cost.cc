@@ -58,7 +58,7 @@ double SdfCost::MixturePsi(double s, double s0, double* d_psi) {
 
 SdfCost::SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
                  const std::vector<double>& sigmas, const SdfCostOptions& options)
-    : lookup_(lookup), term_(options.term), huber_(options.huber_threshold) {
+    : lookup_(lookup), term_(options.term), huber_(options.huber_threshold), mixture_(options.mixture_loss) {
   SAMP_CHECK(lookup != nullptr) << "SdfCost: null shape lookup";
   SAMP_CHECK(!points_in_world.empty()) << "SdfCost: no points";
   SAMP_CHECK(points_in_world.size() == sigmas.size())
@@ -79,6 +79,7 @@ SdfCost::SdfCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& 
   }
   camera_ = options.camera_in_world;
   outlier_threshold_ = options.outlier_threshold;
+  SAMP_CHECK(!mixture_ || outlier_threshold_ > 0.0) << "SdfCost: outlier_threshold must be > 0";
   if (term_ != DataTerm::kPaper) {
     rays_.resize(3 * n);
     for (size_t i = 0; i < n; ++i) {
@@ -190,7 +191,8 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, int begin, int e
     }
     double d_psi = 1.0;
     const double scaled = phi * inv_sigmas_[i];  // s_i = phi / sigma_i
-    residuals[row] = sqrt_weight_ * Psi(scaled, huber_, &d_psi);
+    residuals[row] = sqrt_weight_ * (mixture_ ? MixturePsi(scaled, outlier_threshold_, &d_psi)
+                                              : Psi(scaled, huber_, &d_psi));
     const double f = sqrt_weight_ * d_psi * inv_sigmas_[i];
     if (dz_row) {
       for (int r = 0; r < nr; ++r) dz_row[r] *= f;

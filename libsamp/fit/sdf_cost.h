@@ -103,6 +103,10 @@ struct SdfCostOptions {
   double focal_px = 0.0;
   double silhouette_sigma_px = 2.0;
   double outlier_threshold = 3.0;
+  // kPaper / kRayDepth: the robust Gaussian + uniform mixture of kDisparity
+  // (threshold outlier_threshold) instead of Huber: a point of something else
+  // (clutter, background, a neighbouring car) adds a bounded cost and no pull.
+  bool mixture_loss = false;
 };
 
 // Per-point classification of the kDisparity term (EM association, reports).
@@ -188,6 +192,7 @@ class SdfCost : public ceres::CostFunction {
   double outlier_threshold_ = 3.0;
   std::vector<double> inv_sigmas_;  // 1 / sigma_i
   double huber_ = 1.0;
+  bool mixture_ = false;  // SdfCostOptions::mixture_loss (kPaper, kRayDepth)
   double sqrt_weight_ = 1.0;    // sqrt(w / N)
 };
 

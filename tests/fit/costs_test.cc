@@ -165,6 +165,8 @@ TEST(SdfCost, RayDistanceResidualsAndJacobians) {
   const Eigen::VectorXd z_true = 0.5 * lookup.sigmas();
   const auto surface = testing::SampleSurface(lookup, z_true, 80, &rng);
   const Eigen::Vector3d camera(1.0, -0.3, 2.0);
+  // Huber and the mixture robustifier (mixture_loss), threshold 2 sigma each.
+  for (const bool mixture : {false, true})
   for (const double yaw : {0.4, M_PI - 1e-6, -2.0}) {
     const Eigen::Vector3d t(4.0, 1.6, 15.0);
     const Eigen::Isometry3d world_from_object = WorldFromObject(t, yaw);
@@ -182,6 +184,8 @@ TEST(SdfCost, RayDistanceResidualsAndJacobians) {
     options.weight = 0.25;
     options.term = DataTerm::kRayDepth;
     options.camera_in_world = camera;
+    options.mixture_loss = mixture;
+    options.outlier_threshold = 2.0;
     SdfCost cost(&lookup, points, sigmas, options);
     Eigen::VectorXd z = 0.3 * lookup.sigmas();
     double pose[4] = {t.x() + 0.05, t.y() - 0.02, t.z() + 0.03, yaw + 0.01};
@@ -200,15 +204,18 @@ TEST(SdfCost, RayDistanceResidualsAndJacobians) {
       const double d = BruteForceRayDistance(lookup, z, o, phi < 0.0 ? Eigen::Vector3d(-u) : u, 5 * std::abs(phi));
       num_hits += d >= 0.0;
       const double expected_phi = d >= 0.0 ? (phi < 0.0 ? -d : d) : 5.0 * phi;
+      const double scaled = expected_phi / sigmas[i];
       const double expected = std::sqrt(options.weight / points.size()) *
-                              SdfCost::Psi(expected_phi / sigmas[i], options.huber_threshold, nullptr);
+                              (mixture ? SdfCost::MixturePsi(scaled, options.outlier_threshold, nullptr)
+                                       : SdfCost::Psi(scaled, options.huber_threshold, nullptr));
       EXPECT_NEAR(residuals[i], expected, 2e-3 * std::abs(expected) + 1e-5) << "point " << i << " phi " << phi;
       EXPECT_GE(std::abs(expected_phi), std::abs(phi) - 1e-3) << "the ray distance is at least |phi|";
     }
     EXPECT_GT(num_inside, 15);
     EXPECT_GT(num_hits, 10);  // both paths: rays that reach the surface within 5 |phi| and rays that do not
     EXPECT_GT(int(points.size()) - num_hits, 10);
-    ExpectJacobiansMatch(cost, {z.data(), pose}, 1e-5, "ray distance, yaw " + std::to_string(yaw));
+    ExpectJacobiansMatch(cost, {z.data(), pose}, 1e-5,
+                         std::string(mixture ? "mixture" : "Huber") + " ray distance, yaw " + std::to_string(yaw));
   }
   SdfCostOptions bad;
   bad.term = DataTerm::kRayDepth;

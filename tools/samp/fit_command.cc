@@ -128,6 +128,10 @@ void RegisterFitCommand(CLI::App* app) {
   command->add_option("--huber", o.fit.huber_threshold, "Huber threshold of the data term, in sigma_d")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  command->add_flag("--mixture-loss,!--huber-loss", o.fit.mixture_loss,
+                    "Paper / ray-depth terms: the robust Gaussian + uniform mixture (threshold --outlier-threshold) "
+                    "instead of Huber (docs/fitting.md)")
+      ->capture_default_str();
   auto data_term = std::make_shared<std::string>(DataTermName(o.fit.data_term));
   command->add_option("--data-term", *data_term,
                       "Data term: disparity (each point's disparity vs that of the shape's visible surface on "
@@ -145,6 +149,10 @@ void RegisterFitCommand(CLI::App* app) {
       ->check(CLI::IsMember({"effective", "mean"}));
   command->add_option("--correlation-area", o.fit.correlation_area_px,
                       "Image area over which stereo errors are correlated (effective weighting), px")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  command->add_option("--outlier-threshold", o.fit.outlier_threshold,
+                      "Mixture robustifier (disparity term, --mixture-loss): inlier/outlier threshold s_0, in sigma")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   command->add_option("--association-radius", o.fit.association_radius,
