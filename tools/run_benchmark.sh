@@ -5,8 +5,9 @@
 #   2. per seed, synthesize a fixed set of stereo sequences of the test cars only (the realistic
 #      street preset by default: StereoSGBM disparity, parked rows, traffic, clutter, a stereo
 #      detector's errors; docs/synthetic.md),
-#   3. fit every sequence with the full method (joint SAMP, the paper's data term), the full
-#      method with the ray-distance data term (--ray-depth-inside) and --single-frame,
+#   3. fit every sequence with the full method (`samp fit` defaults: joint shape and motion,
+#      ray-depth data term, mixture robustifier, effective weighting), the paper's energy
+#      (--data-term paper --weighting mean --huber-loss) and --single-frame,
 #   4. evaluate against the ground truth with the raw-stereo and input-detection baselines.
 #
 # Usage: tools/run_benchmark.sh [options]
@@ -27,11 +28,13 @@
 #   --threads T           worker threads (default 2)
 #   --docs                also write docs/results.md and docs/images/benchmark_*.png
 #   --retrain             train the model even when WORK/model_holdout.vdb is up to date
+#   --reuse-sequences     keep WORK/<run>/sequences when its config.json exists (same options
+#                         and seed give the same files; fits and evaluation are redone)
 #   -h, --help            this text
 #
 # Every step logs its command and duration to WORK/benchmark.log. Outputs:
 #   WORK/model_holdout.vdb and per run (seed_<S>, clean_<S>) WORK/<run>/sequences/<seq>/,
-#   fit_full/, fit_full_ray/, fit_single/, eval/.
+#   fit_full/, fit_full_paper/, fit_single/, eval/.
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -49,6 +52,7 @@ clean_comparison=0
 threads=2
 write_docs=0
 retrain=0
+reuse_sequences=0
 
 usage() { sed -n '2,/^set -euo/p' "${BASH_SOURCE[0]}" | sed '$d' | sed 's/^# \{0,1\}//'; }
 die() { echo "run_benchmark: error: $*" >&2; exit 1; }
@@ -69,6 +73,7 @@ while [ $# -gt 0 ]; do
     --threads) threads="$2"; shift 2 ;;
     --docs) write_docs=1; shift ;;
     --retrain) retrain=1; shift ;;
+    --reuse-sequences) reuse_sequences=1; shift ;;
     -h|--help) usage; exit 0 ;;
     *) usage >&2; die "unknown option '$1'" ;;
   esac
@@ -161,22 +166,27 @@ fi
 run_one() {  # run_one NAME PRESET SEED
   local name="$1" run_preset="$2" run_seed="$3"
   local dir="$work/$name"
-  rm -rf "$dir"
-  mkdir -p "$dir"
   local extra=()
   [ "$run_preset" = street ] && extra=(--parked-cars "$parked_cars")
+  if [ "$reuse_sequences" = 1 ] && [ -f "$dir/sequences/config.json" ]; then
+    echo "run_benchmark: $name: reusing $dir/sequences" | tee -a "$log"
+    rm -rf "$dir/fit_full" "$dir/fit_full_paper" "$dir/fit_single" "$dir/eval"
+  else
+  rm -rf "$dir"
+  mkdir -p "$dir"
   step "$name/synth" "$samp" synth --cad "$cad" --manifest "$synth_manifest" "${car_args[@]}" \
     --preset "$run_preset" --sequences "$sequences" --cars-per-sequence "$cars_per_sequence" "${extra[@]}" \
     --seed "$run_seed" --disparity sgbm -o "$dir/sequences"
+  fi
   local seq_args=()
   for s in "$dir"/sequences/[0-9][0-9][0-9][0-9][0-9][0-9]; do seq_args+=(--seq "$s"); done
   step "$name/fit_full" "$samp" fit --model "$model" "${seq_args[@]}" --out "$dir/fit_full" --threads "$threads" -q
-  step "$name/fit_full_ray" "$samp" fit --model "$model" "${seq_args[@]}" --ray-depth-inside \
-    --out "$dir/fit_full_ray" --threads "$threads" -q
+  step "$name/fit_full_paper" "$samp" fit --model "$model" "${seq_args[@]}" \
+    --data-term paper --weighting mean --huber-loss --out "$dir/fit_full_paper" --threads "$threads" -q
   step "$name/fit_single" "$samp" fit --model "$model" "${seq_args[@]}" --single-frame \
     --out "$dir/fit_single" --threads "$threads" -q
   step "$name/eval" "$samp" eval "${seq_args[@]}" --result "full=$dir/fit_full" \
-    --result "full-ray=$dir/fit_full_ray" --result "single-frame=$dir/fit_single" \
+    --result "full-paper=$dir/fit_full_paper" --result "single-frame=$dir/fit_single" \
     --out "$dir/eval" --threads "$threads" --pictures -q
 }
 runs=()
