@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/core/json_fields.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/observations.h"
 
@@ -568,37 +569,38 @@ bool TrackerOptions::Check() const {
   return true;
 }
 
-std::string TrackerOptions::ToJson() const {
-  const nlohmann::json j = {{"along_sigma_a", along_sigma_a},
-                            {"along_sigma_b", along_sigma_b},
-                            {"along_sigma_c", along_sigma_c},
-                            {"across_sigma_a", across_sigma_a},
-                            {"across_sigma_b", across_sigma_b},
-                            {"vertical_sigma_a", vertical_sigma_a},
-                            {"vertical_sigma_b", vertical_sigma_b},
-                            {"size_sigma", size_sigma},
-                            {"yaw_sigma_deg", yaw_sigma_deg},
-                            {"acceleration_sigma", acceleration_sigma},
-                            {"max_speed", max_speed},
-                            {"gate_chi2", gate_chi2},
-                            {"size_gate_chi2", size_gate_chi2},
-                            {"height_gate_chi2", height_gate_chi2},
-                            {"yaw_gate_deg", yaw_gate_deg},
-                            {"tentative_penalty", tentative_penalty},
-                            {"confirm_hits", confirm_hits},
-                            {"tentative_max_misses", tentative_max_misses},
-                            {"max_misses", max_misses},
-                            {"join_fragments", join_fragments},
-                            {"max_join_gap", max_join_gap},
-                            {"join_gate_chi2", join_gate_chi2},
-                            {"resolve_switches", resolve_switches},
-                            {"swap_margin", swap_margin},
-                            {"fit_window", fit_window},
-                            {"min_track_length", min_track_length},
-                            {"frame_rate_hz", frame_rate_hz},
-                            {"warn_median_length", warn_median_length}};
-  return j.dump();
+void OptionFields(OptionsJson& io, TrackerOptions& o) {
+  io("along_sigma_a", o.along_sigma_a);
+  io("along_sigma_b", o.along_sigma_b);
+  io("along_sigma_c", o.along_sigma_c);
+  io("across_sigma_a", o.across_sigma_a);
+  io("across_sigma_b", o.across_sigma_b);
+  io("vertical_sigma_a", o.vertical_sigma_a);
+  io("vertical_sigma_b", o.vertical_sigma_b);
+  io("size_sigma", o.size_sigma);
+  io("yaw_sigma_deg", o.yaw_sigma_deg);
+  io("acceleration_sigma", o.acceleration_sigma);
+  io("max_speed", o.max_speed);
+  io("gate_chi2", o.gate_chi2);
+  io("size_gate_chi2", o.size_gate_chi2);
+  io("height_gate_chi2", o.height_gate_chi2);
+  io("yaw_gate_deg", o.yaw_gate_deg);
+  io("tentative_penalty", o.tentative_penalty);
+  io("confirm_hits", o.confirm_hits);
+  io("tentative_max_misses", o.tentative_max_misses);
+  io("max_misses", o.max_misses);
+  io("join_fragments", o.join_fragments);
+  io("max_join_gap", o.max_join_gap);
+  io("join_gate_chi2", o.join_gate_chi2);
+  io("resolve_switches", o.resolve_switches);
+  io("swap_margin", o.swap_margin);
+  io("fit_window", o.fit_window);
+  io("min_track_length", o.min_track_length);
+  io("frame_rate_hz", o.frame_rate_hz);
+  io("warn_median_length", o.warn_median_length);
 }
+
+std::string TrackerOptions::ToJson() const { return OptionsToJson(*this).dump(); }
 
 std::string TrackingSummary::BriefReport() const {
   std::ostringstream s;

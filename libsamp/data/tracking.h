@@ -26,6 +26,8 @@
 
 namespace samp {
 
+class OptionsJson;
+
 struct TrackerOptions {
   // Detector noise: standard deviations (m) of a detected box's bottom centre
   // in the camera of its frame, d = its horizontal distance (m). Along the
@@ -83,9 +85,13 @@ struct TrackerOptions {
   int warn_median_length = 5;
 
   bool Check() const;
-  // Every field as a JSON object (for config.json).
+  // Every field as a JSON object (for config.json; OptionFields below).
   std::string ToJson() const;
 };
+
+// Lists every TrackerOptions field once, for config.json's writer and reader
+// (core/json_fields.h; pipeline/fit_config.h owns config.json).
+void OptionFields(OptionsJson& io, TrackerOptions& o);
 
 // The detections of one frame, in its camera, with the ego pose.
 struct FrameDetections {

@@ -200,29 +200,16 @@ class ResultMeshes {
   explicit ResultMeshes(const std::string& folder) : folder_(folder) {
     const fs::path tracks = fs::path(folder) / "tracks.json";
     if (!fs::exists(tracks)) return;
-    std::ifstream in(tracks);
-    nlohmann::json j;
-    try {
-      in >> j;
-    } catch (const std::exception& e) {
-      SAMP_THROW() << "eval: cannot parse " << tracks.string() << ": " << e.what();
-    }
-    if (!j.contains("sequences")) return;
-    for (const auto& sequence : j["sequences"]) {
-      if (!sequence.contains("tracks")) continue;
-      const std::string seq = sequence.value("name", "");
-      for (const auto& track : sequence["tracks"]) {
-        if (track.value("mode", "") != "single_frame" || !track.contains("frames")) continue;
-        for (const auto& frame : track["frames"]) {
-          if (!frame.contains("shape_code")) continue;
-          const std::vector<double> code = frame["shape_code"].get<std::vector<double>>();
-          codes_[Key(seq, track.value("track_id", -1), frame.value("frame", -1))] =
-              Eigen::Map<const Eigen::VectorXd>(code.data(), Eigen::Index(code.size()));
-        }
+    const TracksFile file = ReadTracksFile(tracks.string());
+    for (const TracksFileSequence& sequence : file.sequences) {
+      for (const TracksFileTrack& track : sequence.tracks) {
+        if (!track.fit.single_frame) continue;
+        for (const FrameFit& frame : track.fit.frames)
+          codes_[Key(sequence.name, track.fit.track_id, frame.frame)] = frame.shape_code;
       }
     }
     if (!codes_.empty()) {
-      model_path_ = j.value("model", "");
+      model_path_ = file.model;
       SAMP_CHECK(!model_path_.empty()) << "eval: " << tracks.string()
                                        << " has per-frame shape codes but names no model";
     }

@@ -23,6 +23,7 @@
 #include "libsamp/core/progress.h"
 #include "libsamp/eval/procedural.h"
 #include "libsamp/eval/street_scene.h"
+#include "libsamp/fit/motion_model.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/sequence_layout.h"
 #include "libsamp/data/stereo.h"
@@ -44,43 +45,25 @@ constexpr double kRoadHalfWidth = 7.0;
 constexpr double kLaneWidth = 3.5;
 constexpr double kMaxCarCentreX = 6.1;
 
-double WrapAngle(double a) {
-  a = std::fmod(a + kPi, 2.0 * kPi);
-  if (a < 0) a += 2.0 * kPi;
-  return a - kPi;
-}
-
-// KITTI's rotation about the camera's y axis: x_object -> (cos, 0, -sin).
-Eigen::Matrix3d RotationY(double angle) {
-  const double c = std::cos(angle), s = std::sin(angle);
-  Eigen::Matrix3d r;
-  r << c, 0, s, 0, 1, 0, -s, 0, c;
-  return r;
-}
-
-// Forward direction of a heading angle (object x axis in the world).
-Eigen::Vector3d Forward(double heading) {
-  return Eigen::Vector3d(std::cos(heading), 0.0, -std::sin(heading));
-}
-
+// Pose conventions (WrapAngle, Heading, WorldFromObject) and the motion model: the
+// fitter's, fit/motion_model.h.
 struct PlanarState {
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
   double heading = 0.0;
 };
 
-// Exact motion on a circular arc (a straight line when yaw_rate ~ 0) for dt seconds
-// (negative dt goes back in time).
+// Motion for dt seconds (negative dt goes back in time), predicted by the
+// fitter's circular-arc model (fit/motion_model.h PredictMotion; standing and
+// straight are its exact limits v = 0 and omega = 0), so that the ground truth
+// follows the model the fitter predicts with.
 PlanarState Advance(const PlanarState& start, double speed, double yaw_rate, double dt) {
+  const double pose[4] = {start.position.x(), start.position.y(), start.position.z(), start.heading};
+  const double velocity[2] = {speed, yaw_rate};
+  double predicted[6];
+  PredictMotion(MotionModel::kArc, pose, velocity, dt, predicted, nullptr, nullptr);
   PlanarState end;
-  end.heading = start.heading + yaw_rate * dt;
-  if (std::abs(yaw_rate) < 1e-9) {
-    end.position = start.position + speed * dt * Forward(start.heading);
-  } else {
-    const double r = speed / yaw_rate;
-    end.position = start.position + r * Eigen::Vector3d(std::sin(end.heading) - std::sin(start.heading),
-                                                         0.0,
-                                                         std::cos(end.heading) - std::cos(start.heading));
-  }
+  end.position = Eigen::Vector3d(predicted[0], predicted[1], predicted[2]);
+  end.heading = predicted[3];
   return end;
 }
 
@@ -94,7 +77,7 @@ struct GroundBox {
 GroundBox MakeGroundBox(const Eigen::Vector3d& centre, double heading, double length, double width) {
   GroundBox box;
   box.centre = Eigen::Vector2d(centre.x(), centre.z());
-  const Eigen::Vector3d f = Forward(heading);
+  const Eigen::Vector3d f = Heading(heading);
   box.axis_forward = Eigen::Vector2d(f.x(), f.z());
   box.axis_side = Eigen::Vector2d(-box.axis_forward.y(), box.axis_forward.x());
   box.half_length = 0.5 * length;
@@ -169,10 +152,7 @@ struct Scene {
 };
 
 Eigen::Isometry3d WorldFromObject(const PlanarState& state) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = RotationY(state.heading);
-  t.translation() = state.position;
-  return t;
+  return samp::WorldFromObject(state.position, state.heading);
 }
 
 class Random {
@@ -381,10 +361,8 @@ Scene MakeCleanScene(const SynthOptions& options, const std::vector<SynthCar>& c
   ego.heading = -0.5 * kPi;
   for (int t = 0; t < options.num_frames; ++t) {
     const PlanarState s = Advance(ego, scene.ego_speed, scene.ego_yaw_rate, t * dt);
-    Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
-    world_from_camera.linear() = RotationY(s.heading + 0.5 * kPi);
-    world_from_camera.translation() = s.position;
-    scene.world_from_camera.push_back(world_from_camera);
+    // The camera looks along the ego heading: its z is the ego's forward.
+    scene.world_from_camera.push_back(samp::WorldFromObject(s.position, s.heading + 0.5 * kPi));
   }
   StaticMesh road;
   road.mesh = MakeGroundMesh(options.camera_height);
@@ -562,7 +540,8 @@ Scene MakeStreetScene(const SynthOptions& options, const std::vector<SynthCar>& 
   for (int t = 0; t < options.num_frames; ++t) {
     const PlanarState s = Advance(ego, scene.ego_speed, scene.ego_yaw_rate, t * dt);
     Eigen::Isometry3d road_from_camera = Eigen::Isometry3d::Identity();
-    road_from_camera.linear() = RotationY(s.heading + 0.5 * kPi) * scene.sway.Rotation(t * dt);
+    road_from_camera.linear() =
+        samp::WorldFromObject(Eigen::Vector3d::Zero(), s.heading + 0.5 * kPi).linear() * scene.sway.Rotation(t * dt);
     road_from_camera.translation() = s.position + Eigen::Vector3d(0.0, -scene.sway.Bounce(t * dt), 0.0);
     scene.world_from_camera.push_back(road_from_camera);
   }
@@ -1449,6 +1428,22 @@ std::string SynthSummary::BriefReport() const {
   out << ", " << labels << " visible car-frames, " << detections << " detections (" << false_positives
       << " false positives)" << disparity << ", " << Progress::FormatDuration(seconds);
   return out.str();
+}
+
+std::vector<Eigen::Vector4d> SynthTrajectory(const Eigen::Vector4d& origin_pose, double speed, double yaw_rate,
+                                             int num_frames, int origin_frame, double frame_rate_hz) {
+  SAMP_CHECK(num_frames >= 1 && frame_rate_hz > 0) << "SynthTrajectory: num_frames " << num_frames
+                                                   << ", frame_rate_hz " << frame_rate_hz;
+  PlanarState origin;
+  origin.position = origin_pose.head<3>();
+  origin.heading = origin_pose[3];
+  const double dt = 1.0 / frame_rate_hz;
+  std::vector<Eigen::Vector4d> poses;
+  for (int t = 0; t < num_frames; ++t) {
+    const PlanarState s = Advance(origin, speed, yaw_rate, (t - origin_frame) * dt);
+    poses.emplace_back(s.position.x(), s.position.y(), s.position.z(), WrapAngle(s.heading));
+  }
+  return poses;
 }
 
 SynthSummary SynthesizeSequences(const SynthOptions& options, const std::vector<SynthCar>& cars) {

@@ -11,6 +11,7 @@
 // Everything is a function of the options (seed included): same options, same bytes.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -169,6 +170,14 @@ struct SynthSummary {
   double seconds = 0.0;
   std::string BriefReport() const;
 };
+
+// The ground-truth trajectory of a car (or of the ego car): the poses (x, y, z,
+// yaw) of frames 0..num_frames-1 at times (t - origin_frame) / frame_rate_hz
+// from origin_pose with constant speed and yaw rate, moved by the fitter's
+// motion model (fit/motion_model.h PredictMotion), yaw wrapped to (-pi, pi].
+// SynthesizeSequences places every car and the ego camera this way.
+std::vector<Eigen::Vector4d> SynthTrajectory(const Eigen::Vector4d& origin_pose, double speed, double yaw_rate,
+                                             int num_frames, int origin_frame, double frame_rate_hz);
 
 // Writes options.num_sequences sequences from `cars` (at least one). Every file
 // is written atomically; config.json with the effective options goes to the root.

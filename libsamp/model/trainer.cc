@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/core/json_fields.h"
 #include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/progress.h"
@@ -164,6 +165,47 @@ std::string TrainOptions::ToJson() const {
                {"borderline_closing_agreement", gate.borderline_closing_agreement}};
   j["pca"] = {{"num_components", pca.num_components}};
   return DumpJson(j);
+}
+
+TrainOptions TrainOptionsFromJson(const std::string& json, const std::string& source) {
+  const nlohmann::json parsed = ParseJson(json, source);
+  const JsonFields j(parsed, source);
+  TrainOptions o;
+  j.Read("cad_folder", &o.cad_folder);
+  j.Read("manifest", &o.manifest_path);
+  j.Read("preset", &o.preset);
+  const JsonFields grid = j.Object("grid");
+  const std::vector<double> origin = grid.Get<std::vector<double>>("origin");
+  const std::vector<int> dims = grid.Get<std::vector<int>>("dims");
+  SAMP_CHECK(origin.size() == 3 && dims.size() == 3)
+      << grid.Where() << ": 'origin' and 'dims' must have 3 entries each";
+  o.grid.origin = Eigen::Vector3d(origin[0], origin[1], origin[2]);
+  o.grid.dims = Eigen::Vector3i(dims[0], dims[1], dims[2]);
+  grid.Read("voxel_size", &o.grid.voxel_size);
+  const JsonFields scan = j.Object("scan");
+  scan.Read("num_views", &o.scan.num_views);
+  scan.Read("width", &o.scan.width);
+  scan.Read("height", &o.scan.height);
+  scan.Read("fov_deg", &o.scan.fov_deg);
+  scan.Read("distance_factor", &o.scan.distance_factor);
+  const JsonFields sdf = j.Object("sdf");
+  sdf.Read("truncation", &o.sdf.truncation);
+  sdf.Read("carve_margin", &o.sdf.carve_margin);
+  sdf.Read("min_inside_fraction", &o.sdf.min_inside_fraction);
+  const std::string sign = sdf.Get<std::string>("sign");
+  SAMP_CHECK(sign == "carving" || sign == "carving_and_closing")
+      << sdf.Where() << ": key 'sign' must be \"carving\" or \"carving_and_closing\", got \"" << sign << "\"";
+  o.sdf.sign = sign == "carving" ? SdfOptions::Sign::kCarving : SdfOptions::Sign::kCarvingAndClosing;
+  sdf.Read("closing_radius_voxels", &o.sdf.closing_radius_voxels);
+  const JsonFields gate = j.Object("gate");
+  gate.Read("min_box_fill", &o.gate.min_box_fill);
+  gate.Read("borderline_box_fill", &o.gate.borderline_box_fill);
+  gate.Read("min_largest_component", &o.gate.min_largest_component);
+  gate.Read("borderline_largest_component", &o.gate.borderline_largest_component);
+  gate.Read("min_closing_agreement", &o.gate.min_closing_agreement);
+  gate.Read("borderline_closing_agreement", &o.gate.borderline_closing_agreement);
+  j.Object("pca").Read("num_components", &o.pca.num_components);
+  return o;
 }
 
 std::string TrainSummary::BriefReport() const {

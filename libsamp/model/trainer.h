@@ -33,6 +33,14 @@ struct TrainOptions {
   std::string ToJson() const;     // the effective options, stored in the model file
 };
 
+// The reader of TrainOptions::ToJson (the trainer options stored in a model
+// file): every key ToJson writes is required; a missing key or a wrong type
+// throws samp::Error naming `source` (e.g. the model file) and the key.
+// show_progress and num_threads are not stored and keep their defaults.
+// (Keep it in step with ToJson: the round-trip test in tests/model/trainer_test.cc
+// fails when a field is written but not read.)
+TrainOptions TrainOptionsFromJson(const std::string& json, const std::string& source);
+
 struct TrainedShape {
   std::string name, file;
   bool used = false;

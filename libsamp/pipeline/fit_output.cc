@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/viz/surface.h"
 
@@ -144,43 +145,125 @@ nlohmann::json TrackFitToJson(const TrackFit& fit, const AlignedBox& box) {
   return j;
 }
 
-nlohmann::json FitOptionsToJson(const FitOptions& o) {
-  nlohmann::json j;
-  j["single_frame"] = o.single_frame;
-  j["em_iterations"] = o.em_iterations;
-  j["em_initial_sigma_scale"] = o.em_initial_sigma_scale;
-  j["association_radius"] = o.association_radius;
-  j["em_distance_threshold"] = o.em_distance_threshold;
-  j["em_box_margin"] = o.em_box_margin;
-  j["min_points_per_frame"] = o.min_points_per_frame;
-  j["compress_data_blocks"] = o.compress_data_blocks;
-  j["huber_threshold"] = o.huber_threshold;
-  j["sigma_ground"] = o.sigma_ground;
-  j["shape_prior_weight"] = o.shape_prior_weight;
-  j["standing_speed"] = o.standing_speed;
-  j["max_motion_off_axis"] = o.max_motion_off_axis;
-  j["min_speed_significance"] = o.min_speed_significance;
-  j["data_term"] = DataTermName(o.data_term);
-  j["data_weighting"] = DataWeightingName(o.data_weighting);
-  j["correlation_area_px"] = o.correlation_area_px;
-  j["silhouette_sigma_px"] = o.silhouette_sigma_px;
-  j["outlier_threshold"] = o.outlier_threshold;
-  j["straight_yaw_rate"] = o.straight_yaw_rate;
-  j["motion_noise"] = {{"speed_noise", o.motion_noise.speed_noise},
-                       {"yaw_rate_noise", o.motion_noise.yaw_rate_noise},
-                       {"sigma_position", o.motion_noise.sigma_position},
-                       {"sigma_height", o.motion_noise.sigma_height},
-                       {"sigma_yaw", o.motion_noise.sigma_yaw},
-                       {"sigma_speed", o.motion_noise.sigma_speed},
-                       {"sigma_yaw_rate", o.motion_noise.sigma_yaw_rate}};
-  j["max_iterations"] = o.max_iterations;
-  j["max_rejected_steps"] = o.max_rejected_steps;
-  j["function_tolerance"] = o.function_tolerance;
-  j["gradient_tolerance"] = o.gradient_tolerance;
-  j["parameter_tolerance"] = o.parameter_tolerance;
-  j["linear_solver"] = o.linear_solver;
-  j["num_threads"] = o.num_threads;
-  return j;
+namespace {
+Eigen::VectorXd VectorOf(const JsonFields& fields, const std::string& key) {
+  const std::vector<double> v = fields.Get<std::vector<double>>(key);
+  return Eigen::Map<const Eigen::VectorXd>(v.data(), Eigen::Index(v.size()));
+}
+Eigen::Vector3d Vector3Of(const JsonFields& fields, const std::string& key) {
+  const Eigen::VectorXd v = VectorOf(fields, key);
+  SAMP_CHECK(v.size() == 3) << fields.Where() << ": key '" << key << "' must have 3 numbers, has " << v.size();
+  return v;
+}
+}  // namespace
+
+TrackFit TrackFitFromJson(const JsonFields& j, AlignedBox* box) {
+  TrackFit fit;
+  j.Read("track_id", &fit.track_id);
+  j.Read("sequence", &fit.sequence);
+  j.Read("type", &fit.type);
+  const std::string mode = j.Get<std::string>("mode");
+  SAMP_CHECK(mode == "joint" || mode == "single_frame")
+      << j.Where() << ": key 'mode' must be \"joint\" or \"single_frame\", got \"" << mode << "\"";
+  fit.single_frame = mode == "single_frame";
+  fit.shape_code = VectorOf(j, "shape_code");
+  if (box != nullptr) {
+    *box = AlignedBox();
+    if (j.Has("box_min") || j.Has("box_max")) {
+      box->min = Vector3Of(j, "box_min");
+      box->max = Vector3Of(j, "box_max");
+    }
+  }
+  for (const JsonFields& jf : j.Objects("frames")) {
+    FrameFit f;
+    jf.Read("frame", &f.frame);
+    jf.Read("time", &f.time);
+    f.position = Vector3Of(jf, "position_world");
+    jf.Read("yaw", &f.yaw);
+    jf.Read("speed", &f.speed);
+    jf.Read("yaw_rate", &f.yaw_rate);
+    jf.Read("motion_model", &f.motion_model);
+    jf.Read("num_points", &f.num_points);
+    jf.Read("effective_points", &f.effective_points);
+    jf.Read("data_cost", &f.data_cost);
+    if (fit.single_frame) f.shape_code = VectorOf(jf, "shape_code");
+    fit.frames.push_back(std::move(f));
+  }
+  const JsonFields s = j.Object("summary");
+  s.Read("initial_cost", &fit.summary.initial_cost);
+  s.Read("final_cost", &fit.summary.final_cost);
+  s.Read("num_iterations", &fit.summary.num_iterations);
+  s.Read("seconds", &fit.summary.seconds);
+  s.Read("usable", &fit.summary.usable);
+  s.Read("association_notes", &fit.summary.association_notes);
+  for (const JsonFields& js : s.Objects("solves")) {
+    SolveReport r;
+    js.Read("initial_cost", &r.initial_cost);
+    js.Read("final_cost", &r.final_cost);
+    js.Read("num_iterations", &r.num_iterations);
+    js.Read("seconds", &r.seconds);
+    js.Read("median_step_seconds", &r.median_step_seconds);
+    js.Read("usable", &r.usable);
+    js.Read("num_points", &r.num_points);
+    js.Read("termination", &r.termination);
+    fit.summary.solves.push_back(r);
+  }
+  return fit;
+}
+
+void WriteTracksFile(const std::string& path, const TracksFile& file) {
+  nlohmann::json tracks_json;
+  tracks_json["model"] = file.model;
+  tracks_json["sequences"] = nlohmann::json::array();
+  for (const TracksFileSequence& r : file.sequences) {
+    nlohmann::json js;
+    js["directory"] = r.directory;
+    js["name"] = r.name;
+    js["ok"] = r.ok;
+    if (!r.ok) js["error"] = r.error;
+    js["input"] = r.input;
+    js["input_messages"] = r.input_messages;
+    if (r.ok) js["tracking"] = r.tracking;
+    js["tracks"] = nlohmann::json::array();
+    for (const TracksFileTrack& t : r.tracks) {
+      nlohmann::json jt = TrackFitToJson(t.fit, t.box);
+      if (!t.mesh.empty()) jt["mesh"] = t.mesh;
+      if (!t.points.empty()) jt["points"] = t.points;
+      js["tracks"].push_back(std::move(jt));
+    }
+    js["failed_tracks"] = r.failed_tracks;
+    tracks_json["sequences"].push_back(js);
+  }
+  WriteTextFileAtomically(path, tracks_json.dump(2) + "\n");
+}
+
+TracksFile ReadTracksFile(const std::string& path) {
+  const nlohmann::json json = ReadJsonFile(path);
+  const JsonFields j(json, path);
+  TracksFile file;
+  j.Read("model", &file.model);
+  for (const JsonFields& js : j.Objects("sequences")) {
+    TracksFileSequence r;
+    js.Read("directory", &r.directory);
+    js.Read("name", &r.name);
+    js.Read("ok", &r.ok);
+    if (!r.ok) js.Read("error", &r.error);
+    js.Read("input", &r.input);
+    js.Read("input_messages", &r.input_messages);
+    if (r.ok) r.tracking = js.At("tracking");
+    for (const JsonFields& jt : js.Objects("tracks")) {
+      TracksFileTrack t;
+      t.fit = TrackFitFromJson(jt, &t.box);
+      if (jt.Has("mesh") || jt.Has("points")) {
+        jt.Read("mesh", &t.mesh);
+        jt.Read("points", &t.points);
+      }
+      r.tracks.push_back(std::move(t));
+    }
+    js.Read("failed_tracks", &r.failed_tracks);
+    file.sequences.push_back(std::move(r));
+  }
+  return file;
 }
 
 }  // namespace samp

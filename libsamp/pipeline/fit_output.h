@@ -1,13 +1,15 @@
 // Outputs of a fit (docs/fitting.md, "Output"): KITTI tracking result lines,
-// the fitted surface and the aligned observations as PLY, and the JSON
-// records (tracks.json, config.json). Every file is written atomically.
-// Free functions without shared state: thread-safe for distinct paths.
+// the fitted surface and the aligned observations as PLY, and tracks.json
+// (its writer and its one reader; config.json is pipeline/fit_config.h).
+// Every file is written atomically. Free functions without shared state:
+// thread-safe for distinct paths.
 #pragma once
 
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
+#include "libsamp/core/json_fields.h"
 #include "libsamp/core/mesh.h"
 #include "libsamp/fit/fitter.h"
 #include "libsamp/data/track.h"
@@ -34,8 +36,34 @@ Mesh FittedSurface(const ShapeLookup& lookup, const Eigen::VectorXd& z);
 // frame's fitted pose, coloured by frame (blue = first, red = last).
 PointCloud AlignedObservations(const TrackFit& fit);
 
-// JSON record of one fitted track (fields in docs/fitting.md).
+// JSON record of one fitted track (fields in docs/fitting.md) and its reader
+// (the inverse, without points_in_world); `fields` names the file and key in errors.
 nlohmann::json TrackFitToJson(const TrackFit& fit, const AlignedBox& box);
-nlohmann::json FitOptionsToJson(const FitOptions& options);
+TrackFit TrackFitFromJson(const JsonFields& fields, AlignedBox* box = nullptr);
+
+// OUT/tracks.json (docs/fitting.md "Output").
+struct TracksFileTrack {
+  TrackFit fit;              // frames without points_in_world
+  AlignedBox box;            // of the fitted shape; empty when it has no inside
+  std::string mesh, points;  // relative to OUT; empty when no meshes were written
+};
+struct TracksFileSequence {
+  std::string directory;
+  std::string name;
+  bool ok = false;
+  std::string error;                        // why the sequence failed (when !ok)
+  std::string input;                        // SequenceSummary::BriefReport()
+  std::vector<std::string> input_messages;  // the reader's substitutions
+  nlohmann::json tracking;                  // TrackingSummary::ToJson() (when ok)
+  std::vector<TracksFileTrack> tracks;
+  std::vector<std::string> failed_tracks;   // "track <id>: message"
+};
+struct TracksFile {
+  std::string model;  // the model file the fit used
+  std::vector<TracksFileSequence> sequences;
+};
+void WriteTracksFile(const std::string& path, const TracksFile& file);
+// Throws samp::Error naming the file and the key when a key is missing.
+TracksFile ReadTracksFile(const std::string& path);
 
 }  // namespace samp

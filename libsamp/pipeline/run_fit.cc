@@ -14,6 +14,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/ply_io.h"
+#include "libsamp/pipeline/fit_config.h"
 #include "libsamp/pipeline/fit_output.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/model/shape_model.h"
@@ -22,17 +23,17 @@ namespace samp {
 
 namespace fs = std::filesystem;
 
-bool RunFitOptions::Check() const {
+void RunFitOptions::Check() const {
   SAMP_CHECK(link_only || !model_path.empty()) << "RunFitOptions.model_path is empty";
   SAMP_CHECK(!sequences.empty()) << "RunFitOptions.sequences is empty (give at least one --seq)";
   SAMP_CHECK(tracking_labels.empty() || tracking_labels.size() == sequences.size())
       << "RunFitOptions.tracking_labels: " << tracking_labels.size() << " files for "
       << sequences.size() << " sequences (give none or one per sequence)";
   SAMP_CHECK(!output_dir.empty()) << "RunFitOptions.output_dir is empty";
-  SAMP_CHECK(num_threads >= 1) << "RunFitOptions.num_threads must be >= 1";
+  SAMP_CHECK(num_threads >= 0) << "RunFitOptions.num_threads must be >= 0 (0 = all cores), is "
+                               << num_threads;
   fit.Check();
   sequence.Check();
-  return true;
 }
 
 std::string RunFitSummary::BriefReport() const {
@@ -57,7 +58,7 @@ namespace {
 
 struct SequenceWork {
   SequenceFitResult result;
-  std::vector<nlohmann::json> tracks_json;
+  std::vector<TracksFileTrack> tracks;  // for tracks.json
 };
 
 std::string MeshPrefix(const RunFitOptions& options, const std::string& seq, int track_id) {
@@ -127,18 +128,21 @@ void FitSequence(const RunFitOptions& options, const TrackFitter* fitter, size_t
     try {
       const TrackFit& fit = fits[t];
       const std::vector<ObjectLabel> track_labels = FitToLabels(fit, tracks[t], fitter->lookup());
-      nlohmann::json j = TrackFitToJson(fit, FittedBox(fitter->lookup(), fit.shape_code));
+      TracksFileTrack record;
+      record.box = FittedBox(fitter->lookup(), fit.shape_code);
       if (options.write_meshes) {
         const std::string prefix = MeshPrefix(options, result.name, fit.track_id);
         const Mesh mesh = FittedSurface(fitter->lookup(), fit.shape_code);
         WritePly((fs::path(options.output_dir) / (prefix + ".ply")).string(), mesh);
         WritePly((fs::path(options.output_dir) / (prefix + "_points.ply")).string(),
                  AlignedObservations(fit));
-        j["mesh"] = prefix + ".ply";
-        j["points"] = prefix + "_points.ply";
+        record.mesh = prefix + ".ply";
+        record.points = prefix + "_points.ply";
       }
+      record.fit = fit;
+      for (FrameFit& f : record.fit.frames) f.points_in_world.clear();
       labels.insert(labels.end(), track_labels.begin(), track_labels.end());
-      work->tracks_json.push_back(std::move(j));
+      work->tracks.push_back(std::move(record));
       ++result.num_fitted;
       LogInfo() << result.name << ": track " << fit.track_id << " (" << fit.frames.size()
                 << " frames): " << fit.summary.BriefReport();
@@ -180,61 +184,38 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   }
 
   std::vector<SequenceWork> work(options.sequences.size());
-  tbb::task_arena arena(options.num_threads);
+  tbb::task_arena arena(options.num_threads > 0 ? options.num_threads : tbb::task_arena::automatic);
   arena.execute([&] {
     tbb::parallel_for(size_t(0), work.size(), [&](size_t i) { FitSequence(options, fitter.get(), i, &work[i]); });
   });
 
   RunFitSummary summary;
-  nlohmann::json tracks_json;
-  tracks_json["model"] = options.model_path;
-  tracks_json["sequences"] = nlohmann::json::array();
+  TracksFile tracks_file;
+  tracks_file.model = options.model_path;
   for (SequenceWork& w : work) {
     summary.sequences.push_back(w.result);
     const SequenceFitResult& r = w.result;
     summary.num_sequences_failed += !r.ok;
     summary.num_tracks_fitted += r.num_fitted;
     summary.num_tracks_failed += int(r.track_failures.size());
-    nlohmann::json js;
-    js["directory"] = r.directory;
-    js["name"] = r.name;
-    js["ok"] = r.ok;
-    if (!r.ok) js["error"] = r.error;
-    js["input"] = r.input.BriefReport();
-    js["input_messages"] = r.input.messages;
-    if (r.ok) js["tracking"] = nlohmann::json::parse(r.input.tracking.ToJson());
-    js["tracks"] = w.tracks_json;
-    js["failed_tracks"] = r.track_failures;
-    tracks_json["sequences"].push_back(js);
+    TracksFileSequence sequence;
+    sequence.directory = r.directory;
+    sequence.name = r.name;
+    sequence.ok = r.ok;
+    sequence.error = r.error;
+    sequence.input = r.input.BriefReport();
+    sequence.input_messages = r.input.messages;
+    if (r.ok) sequence.tracking = nlohmann::json::parse(r.input.tracking.ToJson());
+    sequence.tracks = std::move(w.tracks);
+    sequence.failed_tracks = r.track_failures;
+    tracks_file.sequences.push_back(std::move(sequence));
   }
-  WriteTextFileAtomically((fs::path(options.output_dir) / "tracks.json").string(), tracks_json.dump(2) + "\n");
+  WriteTracksFile((fs::path(options.output_dir) / "tracks.json").string(), tracks_file);
 
-  nlohmann::json config;
-  config["model"] = options.model_path;
-  config["model_components"] = model ? model->NumComponents() : 0;
-  config["link_only"] = options.link_only;
-  config["sequences"] = options.sequences;
-  config["tracking_labels"] = options.tracking_labels;
-  config["fit"] = FitOptionsToJson(options.fit);
-  const SequenceOptions& so = options.sequence;
-  config["sequence"] = {
-      {"object_types", so.object_types},
-      {"min_detection_score", so.min_detection_score},
-      {"first_frame", so.first_frame},
-      {"last_frame", so.last_frame},
-      {"observations",
-       {{"box_margin", so.observations.box_margin},
-        {"min_height_above_road", so.observations.min_height_above_road},
-        {"max_distance_to_detection", so.observations.max_distance_to_detection},
-        {"depth_gate_sigmas", so.observations.depth_gate_sigmas},
-        {"min_disparity_px", so.observations.min_disparity_px},
-        {"sigma_disparity_px", so.observations.sigma_disparity_px},
-        {"max_points_per_frame", so.observations.max_points_per_frame},
-        {"seed", so.observations.seed}}},
-      {"tracker", nlohmann::json::parse(so.tracker.ToJson())}};
-  config["num_threads"] = options.num_threads;
-  config["write_meshes"] = options.write_meshes;
-  WriteTextFileAtomically((fs::path(options.output_dir) / "config.json").string(), config.dump(2) + "\n");
+  FitConfig config;
+  config.options = options;
+  config.model_components = model ? model->NumComponents() : 0;
+  WriteFitConfig((fs::path(options.output_dir) / "config.json").string(), config);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

@@ -30,8 +30,8 @@ struct RunFitOptions {
   std::string output_dir;
   FitOptions fit;
   SequenceOptions sequence;
-  // Worker threads for sequences and tracks (TBB), >= 1.
-  int num_threads = 1;
+  // Worker threads for sequences and tracks (TBB); 0 = all cores.
+  int num_threads = 0;
   // Write meshes and aligned points.
   bool write_meshes = true;
   // Only link the detections into tracks and write their detections as the
@@ -40,7 +40,8 @@ struct RunFitOptions {
   // tracking) or given back as --tracks.
   bool link_only = false;
 
-  bool Check() const;
+  // Throws samp::Error naming the field and the rule it broke.
+  void Check() const;
 };
 
 struct SequenceFitResult {

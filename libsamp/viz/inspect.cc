@@ -19,6 +19,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
+#include "libsamp/model/trainer.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/scan/renderer.h"
 #include "libsamp/sdf/vdb_io.h"
@@ -65,34 +66,13 @@ std::string SignedK(double k) {
   return buffer;
 }
 
-// The scan and SDF options the model was trained with (defaults for missing keys).
+// The scan and SDF options the model was trained with (its stored trainer
+// options, model/trainer.h TrainOptionsFromJson: a missing key is an error).
 void TrainingOptions(const ShapeModel& model, ScanOptions* scan, SdfOptions* sdf) {
-  Json j;
-  try {
-    j = Json::parse(model.options_json);
-  } catch (const Json::exception&) {
-    LogWarning() << "the model's trainer options are not valid JSON; using default scan/SDF options";
-    return;
-  }
-  auto get = [](const Json& object, const char* key, auto* value) {
-    if (object.is_object() && object.contains(key) && object[key].is_number()) {
-      *value = object[key].get<std::decay_t<decltype(*value)>>();
-    }
-  };
-  if (j.contains("scan")) {
-    const Json& s = j["scan"];
-    get(s, "num_views", &scan->num_views);
-    get(s, "width", &scan->width);
-    get(s, "height", &scan->height);
-    get(s, "fov_deg", &scan->fov_deg);
-    get(s, "distance_factor", &scan->distance_factor);
-  }
-  if (j.contains("sdf")) {
-    const Json& s = j["sdf"];
-    get(s, "truncation", &sdf->truncation);
-    get(s, "carve_margin", &sdf->carve_margin);
-    get(s, "min_inside_fraction", &sdf->min_inside_fraction);
-  }
+  const TrainOptions options =
+      TrainOptionsFromJson(model.options_json, "the model's trainer options (metadata samp_options)");
+  *scan = options.scan;
+  *sdf = options.sdf;
 }
 
 // Canonicalisation options for a CAD file from a manifest (entry or defaults).

@@ -18,12 +18,45 @@
 #include "libsamp/eval/synth.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/sequence.h"
+#include "libsamp/fit/fitter.h"
+#include "libsamp/fit/motion_model.h"
 #include "tests/eval/test_scene.h"
 
 namespace samp {
 namespace {
 
 namespace fs = std::filesystem;
+
+// The ground truth is generated with the model the fitter predicts with: for
+// each motion of the synthetic cars, the fitter's model (selected with the
+// fitter's default thresholds) predicts every next ground-truth pose from the
+// previous one, across the yaw wrap at +-pi and backwards from the middle frame.
+TEST(SynthTest, GroundTruthFollowsTheFittersMotionModel) {
+  const FitOptions fit;
+  struct Case {
+    double speed, yaw_rate;
+    MotionModel model;
+  };
+  for (const Case& c : {Case{0.0, 0.0, MotionModel::kStanding}, Case{9.0, 0.0, MotionModel::kStraight},
+                        Case{5.0, 0.4, MotionModel::kArc}, Case{3.0, -0.25, MotionModel::kArc}}) {
+    EXPECT_EQ(SelectMotionModel(c.speed, c.yaw_rate, fit.standing_speed, fit.straight_yaw_rate), c.model);
+    const Eigen::Vector4d origin(2.0, 1.65, 15.0, 3.1);
+    const std::vector<Eigen::Vector4d> poses = SynthTrajectory(origin, c.speed, c.yaw_rate, 21, 10, 10.0);
+    ASSERT_EQ(poses.size(), 21u);
+    EXPECT_EQ(poses[10], origin);
+    const double velocity[2] = {c.speed, c.yaw_rate};
+    for (int t = 0; t + 1 < 21; ++t) {
+      double predicted[6];
+      PredictMotion(c.model, poses[t].data(), velocity, 0.1, predicted, nullptr, nullptr);
+      for (int k = 0; k < 3; ++k) EXPECT_NEAR(predicted[k], poses[t + 1][k], 1e-9) << "frame " << t;
+      EXPECT_NEAR(WrapAngle(predicted[3] - poses[t + 1][3]), 0.0, 1e-12) << "frame " << t;
+      EXPECT_EQ(predicted[4], c.model == MotionModel::kStanding ? 0.0 : c.speed);
+      EXPECT_EQ(predicted[5], c.model == MotionModel::kArc ? c.yaw_rate : 0.0);
+      EXPECT_GT(poses[t][3], -M_PI);
+      EXPECT_LE(poses[t][3], M_PI);
+    }
+  }
+}
 
 std::map<std::string, std::string> ReadTree(const std::string& root) {
   std::map<std::string, std::string> files;

@@ -238,5 +238,37 @@ TEST_F(TrainerTest, RejectsBadOptionsAndFolders) {
   EXPECT_THROW(TrainShapeModel(options), Error);
 }
 
+// The trainer options stored in a model file have one reader beside their
+// writer: it reads back every option written, and a missing key is an error
+// naming the source and the key.
+TEST(TrainOptionsJson, ReadsBackWhatIsWrittenAndRejectsMissingKeys) {
+  TrainOptions o;
+  o.cad_folder = "cars";
+  o.manifest_path = "cars/cad_manifest.json";
+  o.grid = GridSpec::CarDefault(0.2);
+  o.scan.num_views = 17;
+  o.scan.fov_deg = 33.0;
+  o.sdf.truncation = 0.4;
+  o.sdf.carve_margin = 0.02;
+  o.pca.num_components = 4;
+  const TrainOptions read = TrainOptionsFromJson(o.ToJson(), "test");
+  EXPECT_EQ(read.ToJson(), o.ToJson());
+  EXPECT_EQ(read.grid, o.grid);
+  EXPECT_EQ(read.scan.num_views, 17);
+  EXPECT_EQ(read.sdf.carve_margin, 0.02);
+
+  nlohmann::json j = nlohmann::json::parse(o.ToJson());
+  j["sdf"].erase("carve_margin");
+  try {
+    TrainOptionsFromJson(j.dump(), "model.vdb");
+    ADD_FAILURE() << "a missing key was accepted";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("model.vdb"), std::string::npos) << message;
+    EXPECT_NE(message.find("sdf"), std::string::npos) << message;
+    EXPECT_NE(message.find("'carve_margin'"), std::string::npos) << message;
+  }
+}
+
 }  // namespace
 }  // namespace samp

@@ -4,8 +4,14 @@
 
 #include <gtest/gtest.h>
 
-#include <cmath>
+#include <unistd.h>
 
+#include <cmath>
+#include <filesystem>
+
+#include "libsamp/core/atomic_file.h"
+#include "libsamp/core/error.h"
+#include "libsamp/pipeline/fit_config.h"
 #include "tests/fit/fit_test_util.h"
 
 namespace samp {
@@ -111,9 +117,147 @@ TEST(FitOutput, JsonRecord) {
   EXPECT_EQ(j["frames"][0]["position_world"].size(), 3u);
   EXPECT_EQ(j["summary"]["solves"].size(), 2u);
   EXPECT_DOUBLE_EQ(j["summary"]["final_cost"].get<double>(), 1.0);
-  const nlohmann::json o = FitOptionsToJson(FitOptions());
-  EXPECT_EQ(o["em_iterations"], 1);
-  EXPECT_EQ(o["linear_solver"], "sparse_normal_cholesky");
+}
+
+// The error message of `f`, which must throw samp::Error.
+template <typename F>
+std::string ErrorOf(F f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no samp::Error thrown";
+  return "";
+}
+
+std::string TempFile(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("samp_fit_output_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  return (dir / name).string();
+}
+
+TEST(FitOutput, TracksFileRoundTripAndMissingKeys) {
+  Track track;
+  TracksFileTrack t;
+  MakeFit(&track, &t.fit);
+  t.fit.sequence = "000001";
+  t.fit.frames[1].motion_model = "arc";
+  t.fit.summary.solves.resize(1);
+  t.fit.summary.solves[0].termination = "CONVERGENCE";
+  t.fit.summary.final_cost = 1.5;
+  t.box = FittedBox(Lookup(), t.fit.shape_code);
+  t.mesh = "meshes/track_7.ply";
+  t.points = "meshes/track_7_points.ply";
+  TracksFile file;
+  file.model = "model.vdb";
+  TracksFileSequence sequence;
+  sequence.directory = "seq/000001";
+  sequence.name = "000001";
+  sequence.ok = true;
+  sequence.input = "sequence 000001: 2 frames";
+  sequence.input_messages = {"a note"};
+  sequence.tracks = {t};
+  sequence.failed_tracks = {"track 3: too short"};
+  file.sequences = {sequence, TracksFileSequence()};
+  file.sequences[1].name = "000002";
+  file.sequences[1].error = "no calib/";
+  const std::string path = TempFile("tracks.json");
+  WriteTracksFile(path, file);
+
+  const TracksFile read = ReadTracksFile(path);
+  EXPECT_EQ(read.model, "model.vdb");
+  ASSERT_EQ(read.sequences.size(), 2u);
+  EXPECT_FALSE(read.sequences[1].ok);
+  EXPECT_EQ(read.sequences[1].error, "no calib/");
+  const TracksFileSequence& r = read.sequences[0];
+  EXPECT_TRUE(r.ok);
+  EXPECT_EQ(r.input_messages, sequence.input_messages);
+  EXPECT_EQ(r.failed_tracks, sequence.failed_tracks);
+  ASSERT_EQ(r.tracks.size(), 1u);
+  const TracksFileTrack& rt = r.tracks[0];
+  EXPECT_EQ(rt.mesh, t.mesh);
+  EXPECT_EQ(rt.points, t.points);
+  EXPECT_EQ(rt.box.min, t.box.min);
+  EXPECT_EQ(rt.box.max, t.box.max);
+  EXPECT_EQ(rt.fit.track_id, 7);
+  EXPECT_EQ(rt.fit.shape_code, t.fit.shape_code);
+  EXPECT_DOUBLE_EQ(rt.fit.summary.final_cost, 1.5);
+  ASSERT_EQ(rt.fit.summary.solves.size(), 1u);
+  EXPECT_EQ(rt.fit.summary.solves[0].termination, "CONVERGENCE");
+  ASSERT_EQ(rt.fit.frames.size(), 2u);
+  for (int k = 0; k < 2; ++k) {
+    EXPECT_EQ(rt.fit.frames[k].frame, t.fit.frames[k].frame);
+    EXPECT_EQ(rt.fit.frames[k].position, t.fit.frames[k].position);
+    EXPECT_EQ(rt.fit.frames[k].yaw, t.fit.frames[k].yaw);
+    EXPECT_EQ(rt.fit.frames[k].motion_model, t.fit.frames[k].motion_model);
+    EXPECT_TRUE(rt.fit.frames[k].points_in_world.empty());
+  }
+
+  // A missing key is an error naming the file and the key.
+  nlohmann::json j = ReadJsonFile(path);
+  j["sequences"][0]["tracks"][0]["frames"][1].erase("yaw");
+  WriteTextFileAtomically(path, j.dump());
+  const std::string message = ErrorOf([&] { ReadTracksFile(path); });
+  EXPECT_NE(message.find(path), std::string::npos) << message;
+  EXPECT_NE(message.find("sequences[0].tracks[0].frames[1]"), std::string::npos) << message;
+  EXPECT_NE(message.find("'yaw'"), std::string::npos) << message;
+}
+
+TEST(FitOutput, ConfigHoldsEveryOptionAndReadsBack) {
+  FitConfig config;
+  config.options.model_path = "model.vdb";
+  config.options.sequences = {"a", "b"};
+  config.options.output_dir = "out";
+  config.options.num_threads = 3;
+  config.options.fit.data_term = DataTerm::kDisparity;
+  config.options.fit.data_weighting = DataWeighting::kMean;
+  config.options.link_only = true;
+  config.options.fit.motion_noise.sigma_yaw = 0.07;
+  config.options.sequence.stereo.block_size = 7;
+  config.options.sequence.road_plane.seed = 42;
+  config.options.sequence.tracker.min_track_length = 1;
+  config.model_components = 5;
+  const std::string path = TempFile("config.json");
+  WriteFitConfig(path, config);
+  const nlohmann::json j = ReadJsonFile(path);
+  // The options that change a result when disparity/ or planes/ are missing are there.
+  EXPECT_EQ(j["sequence"]["stereo"]["block_size"], 7);
+  EXPECT_EQ(j["sequence"]["road_plane"]["seed"], 42);
+  EXPECT_EQ(j["fit"]["em_iterations"], 1);
+  EXPECT_EQ(j["fit"]["linear_solver"], "sparse_normal_cholesky");
+  EXPECT_EQ(j["fit"]["data_term"], "disparity");
+  EXPECT_EQ(j["fit"]["data_weighting"], "mean");
+
+  const FitConfig read = ReadFitConfig(path);
+  EXPECT_EQ(read.model_components, 5);
+  EXPECT_EQ(read.options.sequences, config.options.sequences);
+  EXPECT_EQ(read.options.num_threads, 3);
+  EXPECT_EQ(read.options.fit.data_term, DataTerm::kDisparity);
+  EXPECT_EQ(read.options.fit.data_weighting, DataWeighting::kMean);
+  EXPECT_TRUE(read.options.link_only);
+  EXPECT_EQ(read.options.fit.motion_noise.sigma_yaw, 0.07);
+  EXPECT_EQ(read.options.sequence.stereo.block_size, 7);
+  EXPECT_EQ(read.options.sequence.road_plane.seed, 42u);
+  EXPECT_EQ(read.options.sequence.tracker.min_track_length, 1);
+  // Writing what was read gives the same file.
+  WriteFitConfig(path + ".2", read);
+  EXPECT_EQ(ReadJsonFile(path + ".2"), j);
+
+  nlohmann::json broken = j;
+  broken["sequence"]["road_plane"].erase("max_tilt_deg");
+  WriteTextFileAtomically(path, broken.dump());
+  const std::string message = ErrorOf([&] { ReadFitConfig(path); });
+  EXPECT_NE(message.find(path), std::string::npos) << message;
+  EXPECT_NE(message.find("sequence.road_plane"), std::string::npos) << message;
+  EXPECT_NE(message.find("'max_tilt_deg'"), std::string::npos) << message;
+
+  nlohmann::json unknown = j;
+  unknown["fit"]["data_term"] = "no-such-term";
+  WriteTextFileAtomically(path, unknown.dump());
+  const std::string unknown_message = ErrorOf([&] { ReadFitConfig(path); });
+  EXPECT_NE(unknown_message.find(path), std::string::npos) << unknown_message;
+  EXPECT_NE(unknown_message.find("'data_term'"), std::string::npos) << unknown_message;
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 #include "libsamp/viz/inspect.h"
 
+#include "libsamp/model/trainer.h"
+
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -236,7 +238,9 @@ TEST(Inspect, EncodeCadFile) {
           samples(grid.Index(i, j, k), Eigen::Index(n)) = float(sdf);
         }
   }
-  const ShapeModel model = ModelFromSamples(grid, samples, 3, "box_");
+  ShapeModel model = ModelFromSamples(grid, samples, 3, "box_");
+  // Encoding a CAD file scans it with the model's stored trainer options.
+  model.options_json = TrainOptions().ToJson();
 
   TempFolder folder("encode_cad");
   const std::string cad = (folder / "box.obj").string();

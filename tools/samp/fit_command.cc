@@ -191,9 +191,9 @@ void RegisterFitCommand(CLI::App* app) {
                     "(mesh in the image, bird's-eye before/after, shape strip; docs/fitting.md)");
   command->add_flag("--html", visuals->html,
                     "After the fit, write the interactive viewer OUT/index.html (same as `samp view OUT`)");
-  command->add_option("--threads", o.num_threads, "Worker threads for sequences and tracks")
+  command->add_option("--threads", o.num_threads, "Worker threads for sequences and tracks (0 = all cores)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(CLI::NonNegativeNumber);
   AddCommonOptions(command);
   command->callback([options, visuals, data_term, weighting] {
     options->fit.data_term = ParseDataTerm(*data_term);

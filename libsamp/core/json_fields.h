@@ -1,0 +1,130 @@
+// Strict reading of the JSON files samp writes (tracks.json, config.json, the
+// trainer options in a model file): a missing key or a value of the wrong type
+// is a samp::Error naming the file and the key path ("tracks.json:
+// sequences[0].tracks[2].frames[4]: missing key 'yaw'"). No silent defaults.
+// A JsonFields refers to the json it was made from (which must outlive it).
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "libsamp/core/error.h"
+
+namespace samp {
+
+// Parses a JSON file; throws samp::Error naming the file when it is missing or malformed.
+nlohmann::json ReadJsonFile(const std::string& path);
+// Parses JSON text; `source` names it in errors (a file, "model metadata of X").
+nlohmann::json ParseJson(const std::string& text, const std::string& source);
+
+class JsonFields {
+ public:
+  // `object` must be a JSON object (else throws naming `source` and `path`).
+  JsonFields(const nlohmann::json& object, std::string source, std::string path = "");
+
+  bool Has(const std::string& key) const { return object_->contains(key); }
+  // The value at `key`; throws when the key is missing.
+  const nlohmann::json& At(const std::string& key) const;
+  // The value at `key` converted to T; throws when missing or of another type.
+  template <typename T>
+  T Get(const std::string& key) const {
+    const nlohmann::json& value = At(key);
+    try {
+      return value.get<T>();
+    } catch (const nlohmann::json::exception&) {
+      SAMP_THROW() << Where() << ": key '" << key << "' has the wrong type (" << value.type_name() << ": "
+                   << value.dump() << ")";
+    }
+  }
+  template <typename T>
+  void Read(const std::string& key, T* value) const {
+    *value = Get<T>(key);
+  }
+  // The object at `key`.
+  JsonFields Object(const std::string& key) const;
+  // The objects of the array at `key`.
+  std::vector<JsonFields> Objects(const std::string& key) const;
+
+  const std::string& source() const { return source_; }
+  // "source: path" (or "source" at the top level).
+  std::string Where() const;
+
+ private:
+  const nlohmann::json* object_;
+  std::string source_;
+  std::string path_;
+};
+
+// One function per options struct lists its fields once, for both directions:
+//   void OptionFields(OptionsJson& io, StereoOptions& o) {
+//     io("min_disparity", o.min_disparity);
+//     io.Nested("noise", o.noise);   // calls OptionFields(io', o.noise)
+//   }
+// OptionsToJson(o) writes every field (the effective options of a run, for
+// its config.json); OptionsFromJson(fields, &o) reads every field back and
+// throws naming the file and key when one is missing.
+class OptionsJson {
+ public:
+  explicit OptionsJson(nlohmann::json* out) : out_(out) {}
+  explicit OptionsJson(const JsonFields* in) : in_(in) {}
+
+  bool writing() const { return out_ != nullptr; }
+
+  template <typename T>
+  void operator()(const std::string& key, T& value) {
+    if (writing()) {
+      (*out_)[key] = value;
+    } else {
+      in_->Read(key, &value);
+    }
+  }
+  // An enum written by its name: to_name(value) -> const char*, from_name(std::string) -> E
+  // (throws for an unknown name; the error is given the file and key).
+  template <typename E, typename ToName, typename FromName>
+  void Named(const std::string& key, E& value, ToName to_name, FromName from_name) {
+    if (writing()) {
+      (*out_)[key] = std::string(to_name(value));
+    } else {
+      const std::string name = in_->Get<std::string>(key);
+      try {
+        value = from_name(name);
+      } catch (const std::exception& e) {
+        SAMP_THROW() << in_->Where() << ": key '" << key << "': " << e.what();
+      }
+    }
+  }
+  template <typename S>
+  void Nested(const std::string& key, S& options) {
+    if (writing()) {
+      nlohmann::json child = nlohmann::json::object();
+      OptionsJson io(&child);
+      OptionFields(io, options);
+      (*out_)[key] = std::move(child);
+    } else {
+      const JsonFields child = in_->Object(key);
+      OptionsJson io(&child);
+      OptionFields(io, options);
+    }
+  }
+
+ private:
+  nlohmann::json* out_ = nullptr;
+  const JsonFields* in_ = nullptr;
+};
+
+template <typename S>
+nlohmann::json OptionsToJson(const S& options) {
+  nlohmann::json j = nlohmann::json::object();
+  OptionsJson io(&j);
+  OptionFields(io, const_cast<S&>(options));  // the writer only reads the fields
+  return j;
+}
+
+template <typename S>
+void OptionsFromJson(const JsonFields& fields, S* options) {
+  OptionsJson io(&fields);
+  OptionFields(io, *options);
+}
+
+}  // namespace samp

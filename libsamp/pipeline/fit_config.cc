@@ -1,0 +1,127 @@
+#include "libsamp/pipeline/fit_config.h"
+
+#include "libsamp/core/atomic_file.h"
+
+namespace samp {
+
+void OptionFields(OptionsJson& io, StereoOptions& o) {
+  io("min_disparity", o.min_disparity);
+  io("num_disparities", o.num_disparities);
+  io("block_size", o.block_size);
+  io("p1", o.p1);
+  io("p2", o.p2);
+  io("disp12_max_diff", o.disp12_max_diff);
+  io("pre_filter_cap", o.pre_filter_cap);
+  io("uniqueness_ratio", o.uniqueness_ratio);
+  io("speckle_window_size", o.speckle_window_size);
+  io("speckle_range", o.speckle_range);
+  io("mode", o.mode);
+}
+
+void OptionFields(OptionsJson& io, RoadPlaneOptions& o) {
+  io("iterations", o.iterations);
+  io("inlier_threshold", o.inlier_threshold);
+  io("min_point_height_below_camera", o.min_point_height_below_camera);
+  io("max_depth", o.max_depth);
+  io("max_tilt_deg", o.max_tilt_deg);
+  io("min_camera_height", o.min_camera_height);
+  io("max_camera_height", o.max_camera_height);
+  io("max_points", o.max_points);
+  io("min_inliers", o.min_inliers);
+  io("seed", o.seed);
+}
+
+void OptionFields(OptionsJson& io, ObservationOptions& o) {
+  io("box_margin", o.box_margin);
+  io("min_height_above_road", o.min_height_above_road);
+  io("max_distance_to_detection", o.max_distance_to_detection);
+  io("depth_gate_sigmas", o.depth_gate_sigmas);
+  io("min_disparity_px", o.min_disparity_px);
+  io("sigma_disparity_px", o.sigma_disparity_px);
+  io("max_points_per_frame", o.max_points_per_frame);
+  io("seed", o.seed);
+}
+
+void OptionFields(OptionsJson& io, SequenceOptions& o) {
+  io.Nested("stereo", o.stereo);
+  io.Nested("road_plane", o.road_plane);
+  io.Nested("observations", o.observations);
+  io.Nested("tracker", o.tracker);
+  io("tracking_labels_path", o.tracking_labels_path);
+  io("object_types", o.object_types);
+  io("min_detection_score", o.min_detection_score);
+  io("first_frame", o.first_frame);
+  io("last_frame", o.last_frame);
+}
+
+void OptionFields(OptionsJson& io, MotionNoise& o) {
+  io("speed_noise", o.speed_noise);
+  io("yaw_rate_noise", o.yaw_rate_noise);
+  io("sigma_position", o.sigma_position);
+  io("sigma_height", o.sigma_height);
+  io("sigma_yaw", o.sigma_yaw);
+  io("sigma_speed", o.sigma_speed);
+  io("sigma_yaw_rate", o.sigma_yaw_rate);
+}
+
+void OptionFields(OptionsJson& io, FitOptions& o) {
+  io("single_frame", o.single_frame);
+  io("em_iterations", o.em_iterations);
+  io("em_initial_sigma_scale", o.em_initial_sigma_scale);
+  io("association_radius", o.association_radius);
+  io("em_distance_threshold", o.em_distance_threshold);
+  io("em_box_margin", o.em_box_margin);
+  io("min_points_per_frame", o.min_points_per_frame);
+  io("compress_data_blocks", o.compress_data_blocks);
+  io.Named("data_term", o.data_term, DataTermName, ParseDataTerm);
+  io.Named("data_weighting", o.data_weighting, DataWeightingName, ParseDataWeighting);
+  io("correlation_area_px", o.correlation_area_px);
+  io("huber_threshold", o.huber_threshold);
+  io("mixture_loss", o.mixture_loss);
+  io("silhouette_sigma_px", o.silhouette_sigma_px);
+  io("outlier_threshold", o.outlier_threshold);
+  io("sigma_ground", o.sigma_ground);
+  io("shape_prior_weight", o.shape_prior_weight);
+  io("standing_speed", o.standing_speed);
+  io("straight_yaw_rate", o.straight_yaw_rate);
+  io("max_motion_off_axis", o.max_motion_off_axis);
+  io("min_speed_significance", o.min_speed_significance);
+  io.Nested("motion_noise", o.motion_noise);
+  io("max_iterations", o.max_iterations);
+  io("max_rejected_steps", o.max_rejected_steps);
+  io("function_tolerance", o.function_tolerance);
+  io("gradient_tolerance", o.gradient_tolerance);
+  io("parameter_tolerance", o.parameter_tolerance);
+  io("linear_solver", o.linear_solver);
+  io("num_threads", o.num_threads);
+  io("keep_points", o.keep_points);
+}
+
+void OptionFields(OptionsJson& io, RunFitOptions& o) {
+  io("model", o.model_path);
+  io("sequences", o.sequences);
+  io("tracking_labels", o.tracking_labels);
+  io("output_dir", o.output_dir);
+  io.Nested("fit", o.fit);
+  io.Nested("sequence", o.sequence);
+  io("num_threads", o.num_threads);
+  io("write_meshes", o.write_meshes);
+  io("link_only", o.link_only);
+}
+
+void WriteFitConfig(const std::string& path, const FitConfig& config) {
+  nlohmann::json j = OptionsToJson(config.options);
+  j["model_components"] = config.model_components;
+  WriteTextFileAtomically(path, j.dump(2) + "\n");
+}
+
+FitConfig ReadFitConfig(const std::string& path) {
+  const nlohmann::json json = ReadJsonFile(path);
+  const JsonFields fields(json, path);
+  FitConfig config;
+  OptionsFromJson(fields, &config.options);
+  fields.Read("model_components", &config.model_components);
+  return config;
+}
+
+}  // namespace samp
