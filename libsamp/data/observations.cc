@@ -5,19 +5,10 @@
 #include <random>
 
 #include "libsamp/core/error.h"
+#include "libsamp/core/util.h"
 #include "libsamp/data/stereo.h"
 
 namespace samp {
-namespace {
-
-std::uint64_t SplitMix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-}  // namespace
 
 bool ObservationOptions::Check() const {
   SAMP_CHECK(box_margin >= 0 && box_margin <= 2)

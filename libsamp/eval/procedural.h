@@ -7,15 +7,12 @@
 #include <Eigen/Core>
 #include <cstdint>
 
+#include "libsamp/core/util.h"
+
 namespace samp::procedural {
 
-// 64-bit mixing (SplitMix64 finaliser). Inline: the textures call it per pixel.
-inline uint64_t Mix(uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
+// 64-bit mixing (core/util.h SplitMix64). Inline: the textures call it per pixel.
+inline uint64_t Mix(uint64_t x) { return SplitMix64(x); }
 inline uint64_t Mix(uint64_t a, uint64_t b) { return Mix(Mix(a) ^ (b + 0x632be59bd9b4e019ULL)); }
 // Uniform in [0, 1) from integer lattice coordinates and a seed.
 inline double HashToUnit(int64_t x, int64_t y, int64_t z, uint64_t seed) {

@@ -21,6 +21,7 @@
 #include "libsamp/core/log.h"
 #include "libsamp/core/ply_io.h"
 #include "libsamp/core/progress.h"
+#include "libsamp/core/util.h"
 #include "libsamp/eval/procedural.h"
 #include "libsamp/eval/street_scene.h"
 #include "libsamp/fit/motion_model.h"
@@ -1173,11 +1174,6 @@ SynthSequenceInfo WriteSequence(const SynthOptions& options, const Scene& scene,
   }
   WriteTextFileAtomically(layout.GroundTruthCars(), DumpJson(scene_json, 2) + "\n");
   return info;
-}
-
-std::string Lower(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
 }
 
 }  // namespace

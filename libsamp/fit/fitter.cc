@@ -10,6 +10,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/core/util.h"
 #include "libsamp/fit/ground_cost.h"
 #include "libsamp/fit/motion_cost.h"
 #include "libsamp/fit/sdf_cost.h"
@@ -23,16 +24,6 @@ double Seconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-double Median(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  const size_t mid = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + mid, values.end());
-  double m = values[mid];
-  if (values.size() % 2 == 0) {
-    m = 0.5 * (m + *std::max_element(values.begin(), values.begin() + mid));
-  }
-  return m;
-}
 
 std::string Upper(std::string s) {
   for (char& c : s) c = char(std::toupper(static_cast<unsigned char>(c)));

@@ -5,7 +5,7 @@
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
-#include "libsamp/viz/surface.h"
+#include "libsamp/sdf/surface.h"
 
 namespace samp {
 

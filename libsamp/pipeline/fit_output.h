@@ -28,8 +28,8 @@ AlignedBox FittedBox(const ShapeLookup& lookup, const Eigen::VectorXd& z);
 std::vector<ObjectLabel> FitToLabels(const TrackFit& fit, const Track& track,
                                      const ShapeLookup& lookup);
 
-// Zero level set of phi_z in the object frame (OpenVDB mesher via
-// libsamp/viz). Empty when the shape has no inside.
+// Zero level set of phi_z in the object frame (OpenVDB mesher,
+// libsamp/sdf/surface.h). Empty when the shape has no inside.
 Mesh FittedSurface(const ShapeLookup& lookup, const Eigen::VectorXd& z);
 
 // The associated points of every frame moved into the object frame by that

@@ -19,13 +19,15 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
+#include "libsamp/core/nearest_neighbor.h"
+#include "libsamp/core/util.h"
 #include "libsamp/model/trainer.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/scan/renderer.h"
 #include "libsamp/sdf/vdb_io.h"
 #include "libsamp/viz/opencv_image.h"
 #include "libsamp/viz/plot.h"
-#include "libsamp/viz/surface.h"
+#include "libsamp/sdf/surface.h"
 
 namespace samp {
 namespace {
@@ -37,11 +39,6 @@ std::string Format(const char* format, double value) {
   char buffer[64];
   std::snprintf(buffer, sizeof(buffer), format, value);
   return buffer;
-}
-
-std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
 }
 
 bool IsVdbFile(const std::string& path) { return Lower(fs::path(path).extension().string()) == ".vdb"; }
@@ -318,24 +315,6 @@ ShapeInput LoadShapeInput(const std::string& path, const ShapeModel& model,
   return input;
 }
 
-Eigen::VectorXd ProjectToManifold(const ShapeModel& model, const std::vector<float>& sdf,
-                                  double prior_weight) {
-  SAMP_CHECK(int64_t(sdf.size()) == model.NumVoxels())
-      << "ProjectToManifold: " << sdf.size() << " values for a model of " << model.NumVoxels()
-      << " voxels";
-  SAMP_CHECK(prior_weight >= 0) << "ProjectToManifold: prior_weight must be >= 0";
-  const Eigen::Map<const Eigen::VectorXf> x(sdf.data(), Eigen::Index(sdf.size()));
-  const Eigen::VectorXf centred = x - model.mean;
-  Eigen::VectorXd z = (model.components.transpose() * centred).cast<double>();
-  if (prior_weight > 0) {
-    for (int i = 0; i < z.size(); ++i) {
-      const double variance = model.eigenvalues[i];
-      z[i] = variance > 0 ? z[i] / (1.0 + prior_weight / variance) : 0.0;
-    }
-  }
-  return z;
-}
-
 std::vector<Eigen::Vector3f> SampleSurface(const Mesh& mesh, int count, uint64_t seed) {
   std::vector<Eigen::Vector3f> points;
   if (mesh.Empty() || count <= 0) return points;
@@ -378,61 +357,21 @@ std::vector<double> NearestDistanceEach(const std::vector<Eigen::Vector3f>& from
                                         const std::vector<Eigen::Vector3f>& to) {
   if (to.empty()) return std::vector<double>(from.size(), std::numeric_limits<double>::infinity());
   if (from.empty()) return {};
-  // Uniform bucket grid over `to`, about 100 cells along the longest side.
-  Eigen::Vector3f lo = to[0], hi = to[0];
-  for (const auto& p : to) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  const float cell = std::max(1e-4f, (hi - lo).maxCoeff() / 100.0f);
-  const Eigen::Vector3i dims = (((hi - lo) / cell).array().floor().cast<int>() + 1).matrix();
-  auto cell_of = [&](const Eigen::Vector3f& p) {
-    return Eigen::Vector3i(((p - lo) / cell).array().floor().cast<int>().matrix());
-  };
-  auto index_of = [&](const Eigen::Vector3i& c) {
-    return (int64_t(c.z()) * dims.y() + c.y()) * dims.x() + c.x();
-  };
-  const int64_t num_cells = int64_t(dims.x()) * dims.y() * dims.z();
-  std::vector<int> start(num_cells + 1, 0), order(to.size());
-  for (const auto& p : to) ++start[index_of(cell_of(p)) + 1];
-  for (int64_t i = 0; i < num_cells; ++i) start[i + 1] += start[i];
-  {
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (size_t i = 0; i < to.size(); ++i) order[fill[index_of(cell_of(to[i]))]++] = int(i);
+  // The nearest-neighbour grid of core/nearest_neighbor.h over `to`, about 100
+  // cells along its longest side, searching as far as the farthest query.
+  std::vector<Eigen::Vector3d> reference(to.size());
+  Eigen::Vector3d lo = to[0].cast<double>(), hi = lo;
+  for (size_t i = 0; i < to.size(); ++i) {
+    reference[i] = to[i].cast<double>();
+    lo = lo.cwiseMin(reference[i]), hi = hi.cwiseMax(reference[i]);
   }
+  Eigen::Vector3d all_lo = lo, all_hi = hi;
+  for (const auto& p : from) all_lo = all_lo.cwiseMin(p.cast<double>()), all_hi = all_hi.cwiseMax(p.cast<double>());
+  const double cell = std::max(1e-4, (hi - lo).maxCoeff() / 100.0);
+  const RadiusNearestNeighbor index(reference, (all_hi - all_lo).norm() + cell, cell);
   std::vector<double> distances(from.size());
   tbb::parallel_for(tbb::blocked_range<size_t>(0, from.size()), [&](const tbb::blocked_range<size_t>& range) {
-    for (size_t q = range.begin(); q != range.end(); ++q) {
-      const Eigen::Vector3f& p = from[q];
-      const Eigen::Vector3i c = cell_of(p);
-      // Rings beyond the grid on every side hold nothing: stop there.
-      const int max_ring = c.cwiseAbs().cwiseMax((dims - c).cwiseAbs()).maxCoeff() + 1;
-      float best = std::numeric_limits<float>::infinity();
-      for (int ring = 0; ring <= max_ring; ++ring) {
-        for (int z = std::max(0, c.z() - ring); z <= std::min(dims.z() - 1, c.z() + ring); ++z) {
-          for (int y = std::max(0, c.y() - ring); y <= std::min(dims.y() - 1, c.y() + ring); ++y) {
-            const bool on_shell_yz = std::abs(z - c.z()) == ring || std::abs(y - c.y()) == ring;
-            auto visit = [&](int x) {
-              const int64_t i = index_of(Eigen::Vector3i(x, y, z));
-              for (int k = start[i]; k < start[i + 1]; ++k) {
-                best = std::min(best, (to[order[k]] - p).squaredNorm());
-              }
-            };
-            if (on_shell_yz) {
-              for (int x = std::max(0, c.x() - ring); x <= std::min(dims.x() - 1, c.x() + ring); ++x) {
-                visit(x);
-              }
-            } else {
-              if (c.x() - ring >= 0 && c.x() - ring < dims.x()) visit(c.x() - ring);
-              if (c.x() + ring >= 0 && c.x() + ring < dims.x()) visit(c.x() + ring);
-            }
-          }
-        }
-        // Points in later rings are at least ring * cell away.
-        if (best < std::numeric_limits<float>::infinity() &&
-            std::sqrt(best) <= float(ring) * cell) {
-          break;
-        }
-      }
-      distances[q] = std::sqrt(double(best));
-    }
+    for (size_t q = range.begin(); q != range.end(); ++q) distances[q] = index.Distance(from[q].cast<double>());
   });
   return distances;
 }

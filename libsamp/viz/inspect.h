@@ -15,6 +15,7 @@
 
 #include "libsamp/core/camera.h"
 #include "libsamp/core/mesh.h"
+#include "libsamp/model/manifold_projection.h"
 #include "libsamp/model/shape_model.h"
 #include "libsamp/scan/canonical.h"
 #include "libsamp/scan/scanner.h"
@@ -129,9 +130,8 @@ struct ShapeInput {
 ShapeInput LoadShapeInput(const std::string& path, const ShapeModel& model,
                           const std::string& manifest_path = "");
 
-// z = W^T (x - mu) with the optional prior (see EncodeOptions::prior_weight).
-Eigen::VectorXd ProjectToManifold(const ShapeModel& model, const std::vector<float>& sdf,
-                                  double prior_weight = 0.0);
+// ProjectToManifold (z = W^T (x - mu) with the optional prior, see
+// EncodeOptions::prior_weight) is model/manifold_projection.h.
 
 // `count` points sampled uniformly by area on the triangles (seeded).
 std::vector<Eigen::Vector3f> SampleSurface(const Mesh& mesh, int count, uint64_t seed);

@@ -17,7 +17,7 @@
 #include "libsamp/viz/inspect.h"
 #include "libsamp/viz/opencv_image.h"
 #include "libsamp/viz/plot.h"
-#include "libsamp/viz/surface.h"
+#include "libsamp/sdf/surface.h"
 
 namespace samp {
 namespace {

@@ -12,7 +12,7 @@
 #include "libsamp/model/pca.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/sdf/vdb_io.h"
-#include "libsamp/viz/surface.h"
+#include "libsamp/sdf/surface.h"
 
 namespace samp {
 namespace {

@@ -1,4 +1,4 @@
-#include "libsamp/viz/surface.h"
+#include "libsamp/sdf/surface.h"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/VolumeToMesh.h>
