@@ -10,7 +10,9 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/ply_io.h"
-#include "libsamp/viz/sequence_files.h"
+#include "libsamp/data/kitti_io.h"
+#include "libsamp/data/sequence.h"
+#include "libsamp/data/sequence_layout.h"
 #include "libsamp/model/shape_model.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/viz/image.h"
@@ -21,7 +23,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Json = nlohmann::json;
-using namespace sequence_files;  // NOLINT: the interim readers (sequence_files.h)
 
 // ---- tracks.json / config.json (fields in docs/fitting.md, "Output") ----------
 // Every missing or mistyped key is an error naming the file and the key.
@@ -75,11 +76,11 @@ std::vector<float> VertexDistances(const Mesh& mesh, const Eigen::Isometry3d& tr
 
 void AttachGroundTruth(const std::string& directory, const std::string& name, const LoadFitRunOptions& options,
                        SequenceView* sequence) {
-  const fs::path gt = fs::path(directory) / "gt";  // docs/synthetic.md, "Ground truth"
-  const fs::path labels_path = gt / "label_02" / (name + ".txt");
+  const SequenceLayout layout(directory, name);  // docs/synthetic.md, "Ground truth"
+  const std::string labels_path = layout.GroundTruthLabels();
   if (!fs::exists(labels_path)) return;
   std::map<int, GroundTruthCarView> cars;
-  for (const ObjectLabel& label : ReadTrackingLabels(labels_path.string())) {
+  for (const ObjectLabel& label : ReadTrackingLabels(labels_path)) {
     if (label.track_id < 0) continue;
     GroundTruthCarView& car = cars[label.track_id];
     car.id = label.track_id;
@@ -90,8 +91,8 @@ void AttachGroundTruth(const std::string& directory, const std::string& name, co
     car.world_from_object[label.frame] = world_from_camera * CameraFromLabel(label);
   }
   for (auto& [id, car] : cars) {
-    const fs::path mesh_path = gt / "meshes" / ("track_" + std::to_string(id) + ".ply");
-    if (fs::exists(mesh_path)) car.mesh = LoadMesh(mesh_path.string());
+    const std::string mesh_path = layout.GroundTruthMesh(id);
+    if (fs::exists(mesh_path)) car.mesh = LoadMesh(mesh_path);
     sequence->ground_truth.push_back(std::move(car));
   }
   // Each fitted track: the true car whose origin is nearest over the common
@@ -224,7 +225,7 @@ FitRunView LoadFitRun(const std::string& output_dir, const LoadFitRunOptions& op
         }
       }
     }
-    sequence.camera = ReadCalibration(files.calibration, width, height);
+    sequence.camera = ReadCalibration(files.calibration, width, height).camera;
     std::vector<Eigen::Isometry3d> poses;
     if (!files.poses.empty()) poses = ReadPoses(files.poses);
     for (int frame : sequence.frames) {
@@ -337,7 +338,8 @@ FitRunView LoadFitRun(const std::string& output_dir, const LoadFitRunOptions& op
       const Eigen::Isometry3d& wfc = sequence.world_from_camera.at(f.frame);
       const Eigen::Vector3d n = wfc.linear() * p.head<3>();
       sequence.ground_plane_in_world << n, p[3] - n.dot(wfc.translation());
-      sequence.ground_plane_source = "planes/" + FrameFileName(sequence.name, f.frame, ".txt");
+      sequence.ground_plane_source =
+          std::string(SequenceLayout::kPlanesFolder) + "/" + SequenceLayout::FrameFileName(sequence.name, f.frame, ".txt");
       break;
     }
     if (sequence.ground_plane_source.empty()) {
