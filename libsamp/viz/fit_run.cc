@@ -1,7 +1,5 @@
 #include "libsamp/viz/fit_run.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -14,6 +12,8 @@
 #include "libsamp/data/sequence.h"
 #include "libsamp/data/sequence_layout.h"
 #include "libsamp/model/shape_model.h"
+#include "libsamp/pipeline/fit_config.h"
+#include "libsamp/pipeline/fit_output.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/viz/image.h"
 #include "libsamp/viz/inspect.h"
@@ -22,46 +22,6 @@ namespace samp {
 namespace {
 
 namespace fs = std::filesystem;
-using Json = nlohmann::json;
-
-// ---- tracks.json / config.json (fields in docs/fitting.md, "Output") ----------
-// Every missing or mistyped key is an error naming the file and the key.
-
-Json ReadJson(const std::string& path) {
-  std::ifstream in(path);
-  SAMP_CHECK(in) << "cannot open " << path;
-  try {
-    return Json::parse(in);
-  } catch (const std::exception& e) {
-    SAMP_THROW() << path << ": not valid JSON: " << e.what();
-  }
-}
-
-const Json& Key(const Json& j, const char* key, const std::string& where) {
-  SAMP_CHECK(j.is_object() && j.contains(key)) << where << ": missing key \"" << key << "\"";
-  return j.at(key);
-}
-
-template <typename T>
-T Get(const Json& j, const char* key, const std::string& where) {
-  const Json& v = Key(j, key, where);
-  try {
-    return v.get<T>();
-  } catch (const std::exception&) {
-    SAMP_THROW() << where << ": key \"" << key << "\" has the wrong type (" << v.type_name() << ")";
-  }
-}
-
-Eigen::VectorXd GetVector(const Json& j, const char* key, const std::string& where) {
-  const std::vector<double> v = Get<std::vector<double>>(j, key, where);
-  return Eigen::Map<const Eigen::VectorXd>(v.data(), Eigen::Index(v.size()));
-}
-
-Eigen::Vector3d Get3(const Json& j, const char* key, const std::string& where) {
-  const Eigen::VectorXd v = GetVector(j, key, where);
-  SAMP_CHECK(v.size() == 3) << where << ": key \"" << key << "\" must hold 3 numbers";
-  return v;
-}
 
 Eigen::Isometry3d CameraFromLabel(const ObjectLabel& label) { return PoseFromYaw(label.position, label.rotation_y); }
 
@@ -174,18 +134,19 @@ int FrameIndexOfColor(uint8_t red, uint8_t green, uint8_t blue, int num_frames) 
 FitRunView LoadFitRun(const std::string& output_dir, const LoadFitRunOptions& options) {
   options.Check();
   const fs::path out(output_dir);
-  const std::string tracks_path = (out / "tracks.json").string();
-  const Json tracks_json = ReadJson(tracks_path);
+  // tracks.json and config.json through their one reader (pipeline/fit_output.h,
+  // pipeline/fit_config.h): a missing key is an error naming the file and key.
+  const TracksFile tracks_file = ReadTracksFile((out / "tracks.json").string());
   FitRunView run;
   run.output_dir = output_dir;
-  run.model_path = Get<std::string>(tracks_json, "model", tracks_path);
+  run.model_path = tracks_file.model;
   // The tracking label files of config.json, one per sequence directory.
   std::map<std::string, std::string> tracking_labels;
   const fs::path config_path = out / "config.json";
   if (fs::exists(config_path)) {
-    const Json config = ReadJson(config_path.string());
-    const auto dirs = Get<std::vector<std::string>>(config, "sequences", config_path.string());
-    const auto labels = Get<std::vector<std::string>>(config, "tracking_labels", config_path.string());
+    const FitConfig config = ReadFitConfig(config_path.string());
+    const std::vector<std::string>& dirs = config.options.sequences;
+    const std::vector<std::string>& labels = config.options.tracking_labels;
     for (size_t i = 0; i < labels.size() && i < dirs.size(); ++i) tracking_labels[dirs[i]] = labels[i];
   }
   // Sigmas of the model for the code in sigmas; a missing model only loses that.
@@ -200,17 +161,11 @@ FitRunView LoadFitRun(const std::string& output_dir, const LoadFitRunOptions& op
     LogInfo() << "model " << run.model_path << " not found: codes shown unscaled";
   }
 
-  const Json& sequences = Key(tracks_json, "sequences", tracks_path);
-  SAMP_CHECK(sequences.is_array()) << tracks_path << ": \"sequences\" must be an array";
-  for (size_t s = 0; s < sequences.size(); ++s) {
-    const std::string where = tracks_path + " sequences[" + std::to_string(s) + "]";
-    const Json& js = sequences[s];
-    if (!Get<bool>(js, "ok", where)) continue;
-    const Json& jtracks = Key(js, "tracks", where);
-    if (!jtracks.is_array() || jtracks.empty()) continue;
+  for (const TracksFileSequence& js : tracks_file.sequences) {
+    if (!js.ok || js.tracks.empty()) continue;
     SequenceView sequence;
-    sequence.directory = Get<std::string>(js, "directory", where);
-    sequence.name = Get<std::string>(js, "name", where);
+    sequence.directory = js.directory;
+    sequence.name = js.name;
     sequence.error_tau = options.error_tau;
     const SequenceFiles files = ListSequence(sequence.directory);
     // The image size: from the first left image, else KITTI's.
@@ -244,40 +199,30 @@ FitRunView LoadFitRun(const std::string& output_dir, const LoadFitRunOptions& op
       }
     }
 
-    for (size_t t = 0; t < jtracks.size(); ++t) {
-      const std::string twhere = where + " tracks[" + std::to_string(t) + "]";
-      const Json& jt = jtracks[t];
+    for (const TracksFileTrack& jt : js.tracks) {
       TrackView track;
-      track.id = Get<int>(jt, "track_id", twhere);
-      track.type = Get<std::string>(jt, "type", twhere);
-      track.mode = Get<std::string>(jt, "mode", twhere);
-      track.shape_code = GetVector(jt, "shape_code", twhere);
+      track.id = jt.fit.track_id;
+      track.type = jt.fit.type;
+      track.mode = jt.fit.single_frame ? "single_frame" : "joint";
+      track.shape_code = jt.fit.shape_code;
       if (sigmas.size() == track.shape_code.size() && (sigmas.array() > 0).all()) {
         track.code_in_sigmas = track.shape_code.cwiseQuotient(sigmas);
       }
-      if (jt.contains("box_min")) {
-        track.box.min = Get3(jt, "box_min", twhere);
-        track.box.max = Get3(jt, "box_max", twhere);
-      }
-      const Json& summary = Key(jt, "summary", twhere);
-      track.initial_cost = Get<double>(summary, "initial_cost", twhere + " summary");
-      track.final_cost = Get<double>(summary, "final_cost", twhere + " summary");
-      track.num_iterations = Get<int>(summary, "num_iterations", twhere + " summary");
-      track.seconds = Get<double>(summary, "seconds", twhere + " summary");
-      const Json& jframes = Key(jt, "frames", twhere);
-      SAMP_CHECK(jframes.is_array()) << twhere << ": \"frames\" must be an array";
-      for (size_t k = 0; k < jframes.size(); ++k) {
-        const std::string fwhere = twhere + " frames[" + std::to_string(k) + "]";
-        const Json& jf = jframes[k];
+      track.box = jt.box;
+      track.initial_cost = jt.fit.summary.initial_cost;
+      track.final_cost = jt.fit.summary.final_cost;
+      track.num_iterations = jt.fit.summary.num_iterations;
+      track.seconds = jt.fit.summary.seconds;
+      for (const FrameFit& jf : jt.fit.frames) {
         TrackFrameView f;
-        f.frame = Get<int>(jf, "frame", fwhere);
-        f.time = Get<double>(jf, "time", fwhere);
-        f.world_from_object = PoseFromYaw(Get3(jf, "position_world", fwhere), Get<double>(jf, "yaw", fwhere));
-        f.speed = Get<double>(jf, "speed", fwhere);
-        f.yaw_rate = Get<double>(jf, "yaw_rate", fwhere);
-        f.motion_model = Get<std::string>(jf, "motion_model", fwhere);
-        f.num_points = Get<int>(jf, "num_points", fwhere);
-        f.data_cost = Get<double>(jf, "data_cost", fwhere);
+        f.frame = jf.frame;
+        f.time = jf.time;
+        f.world_from_object = PoseFromYaw(jf.position, jf.yaw);
+        f.speed = jf.speed;
+        f.yaw_rate = jf.yaw_rate;
+        f.motion_model = jf.motion_model;
+        f.num_points = jf.num_points;
+        f.data_cost = jf.data_cost;
         const Eigen::Isometry3d world_from_camera = sequence.world_from_camera.count(f.frame)
                                                         ? sequence.world_from_camera.at(f.frame)
                                                         : Eigen::Isometry3d::Identity();
@@ -302,8 +247,8 @@ FitRunView LoadFitRun(const std::string& output_dir, const LoadFitRunOptions& op
         }
         track.frames.push_back(std::move(f));
       }
-      if (jt.contains("mesh")) {
-        const std::string mesh_path = (out / Get<std::string>(jt, "mesh", twhere)).string();
+      if (!jt.mesh.empty()) {
+        const std::string mesh_path = (out / jt.mesh).string();
         try {
           track.mesh = LoadMesh(mesh_path);
         } catch (const Error& e) {
@@ -311,8 +256,8 @@ FitRunView LoadFitRun(const std::string& output_dir, const LoadFitRunOptions& op
           LogWarning() << "track " << track.id << ": " << e.what();
         }
       }
-      if (jt.contains("points")) {
-        const std::string points_path = (out / Get<std::string>(jt, "points", twhere)).string();
+      if (!jt.points.empty()) {
+        const std::string points_path = (out / jt.points).string();
         const PointCloud cloud = ReadPointCloudPly(points_path);
         SAMP_CHECK(cloud.colors.size() == cloud.points.size())
             << points_path << ": the aligned points carry no frame colours";

@@ -2,8 +2,9 @@
 // sequence the camera, the ego poses, the left images, and per track the
 // fitted mesh, the fitted and the detected pose of every frame and the
 // associated stereo points. Read back from the run's files (tracks.json,
-// meshes/, the sequence directories named there) by LoadFitRun, so viz needs
-// no fit headers. Plain data; safe to read from many threads.
+// meshes/, the sequence directories named there) by LoadFitRun, through the
+// formats' owners (pipeline/fit_output.h, pipeline/fit_config.h, data/).
+// Plain data; safe to read from many threads.
 #pragma once
 
 #include <Eigen/Core>

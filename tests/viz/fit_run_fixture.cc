@@ -1,7 +1,5 @@
 #include "tests/viz/fit_run_fixture.h"
 
-#include <nlohmann/json.hpp>
-
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -10,6 +8,8 @@
 #include "libsamp/core/mesh.h"
 #include "libsamp/core/ply_io.h"
 #include "libsamp/core/camera.h"
+#include "libsamp/pipeline/fit_config.h"
+#include "libsamp/pipeline/fit_output.h"
 #include "libsamp/viz/fit_run.h"
 #include "libsamp/viz/image.h"
 #include "libsamp/viz/inspect.h"
@@ -128,7 +128,7 @@ FitRunFixture WriteFitRunFixture(const std::string& root, const FixtureOptions& 
 
   std::vector<std::vector<ObjectLabel>> detections(options.num_frames);
   std::vector<ObjectLabel> gt_labels;
-  nlohmann::json tracks = nlohmann::json::array();
+  TracksFileSequence sequence;
   const double road_y = 1.65;
   for (int t = 0; t < options.num_tracks; ++t) {
     FixtureTrack track;
@@ -136,7 +136,7 @@ FitRunFixture WriteFitRunFixture(const std::string& root, const FixtureOptions& 
     const double lateral = (t % 2 == 0 ? -1.0 : 1.0) * (3.0 + 2.5 * (t / 2));
     const double start = 12.0 + 7.0 * t, speed = (t == 0) ? 0.0 : 4.0 + 2.0 * t;
     const double yaw = -M_PI / 2 + 0.05 * t;  // heading along +z
-    nlohmann::json frames = nlohmann::json::array();
+    TracksFileTrack record;
     PointCloud aligned;
     for (int k = 0; k < options.num_frames; ++k) {
       const double time = k / 10.0;
@@ -164,11 +164,18 @@ FitRunFixture WriteFitRunFixture(const std::string& root, const FixtureOptions& 
         aligned.colors.push_back(color);
       }
       track.points_in_world.push_back(world);
-      frames.push_back({{"frame", k}, {"time", time},
-                        {"position_world", {fitted.translation().x(), fitted.translation().y(), fitted.translation().z()}},
-                        {"yaw", fitted_yaw}, {"speed", speed}, {"yaw_rate", 0.0},
-                        {"motion_model", speed < 1.0 ? "standing" : "straight"},
-                        {"num_points", options.points_per_frame}, {"data_cost", 0.01 * (k + 1)}});
+      FrameFit frame;
+      frame.frame = k;
+      frame.time = time;
+      frame.position = fitted.translation();
+      frame.yaw = fitted_yaw;
+      frame.speed = speed;
+      frame.yaw_rate = 0.0;
+      frame.motion_model = speed < 1.0 ? "standing" : "straight";
+      frame.num_points = options.points_per_frame;
+      frame.effective_points = options.points_per_frame;
+      frame.data_cost = 0.01 * (k + 1);
+      record.fit.frames.push_back(frame);
     }
     const std::string mesh = "meshes/track_" + std::to_string(track.id) + ".ply";
     const std::string points = "meshes/track_" + std::to_string(track.id) + "_points.ply";
@@ -177,26 +184,41 @@ FitRunFixture WriteFitRunFixture(const std::string& root, const FixtureOptions& 
     if (options.ground_truth) {
       WritePly((seq / "gt" / "meshes" / ("track_" + std::to_string(track.id) + ".ply")).string(), true_car);
     }
-    tracks.push_back({{"track_id", track.id}, {"sequence", name}, {"type", "Car"}, {"mode", "joint"},
-                      {"shape_code", {0.5 - 0.2 * t, 0.1 * t, -0.3}},
-                      {"box_min", {-2.0, -1.5, -0.9}}, {"box_max", {2.0, 0.0, 0.9}},
-                      {"frames", frames},
-                      {"summary", {{"initial_cost", 1.5 + t}, {"final_cost", 0.2 + 0.01 * t}, {"num_iterations", 12},
-                                   {"seconds", 0.05}, {"usable", true}, {"solves", nlohmann::json::array()}}},
-                      {"mesh", mesh}, {"points", points}});
+    record.fit.track_id = track.id;
+    record.fit.sequence = name;
+    record.fit.type = "Car";
+    record.fit.single_frame = false;
+    record.fit.shape_code = Eigen::Vector3d(0.5 - 0.2 * t, 0.1 * t, -0.3);
+    record.box.min = Eigen::Vector3d(-2.0, -1.5, -0.9);
+    record.box.max = Eigen::Vector3d(2.0, 0.0, 0.9);
+    record.fit.summary.initial_cost = 1.5 + t;
+    record.fit.summary.final_cost = 0.2 + 0.01 * t;
+    record.fit.summary.num_iterations = 12;
+    record.fit.summary.seconds = 0.05;
+    record.fit.summary.usable = true;
+    record.mesh = mesh;
+    record.points = points;
+    sequence.tracks.push_back(std::move(record));
     fixture.tracks.push_back(std::move(track));
   }
   for (int k = 0; k < options.num_frames; ++k) {
     WriteLabels((seq / "detections" / Frame(name, k, ".txt")).string(), detections[k]);
   }
   if (options.ground_truth) WriteTrackingLabels((seq / "gt" / "label_02" / (name + ".txt")).string(), gt_labels);
-  nlohmann::json sequence = {{"directory", fixture.sequence_dir}, {"name", name}, {"ok", true},
-                             {"input", "fixture"}, {"input_messages", nlohmann::json::array()},
-                             {"tracks", tracks}, {"failed_tracks", nlohmann::json::array()}};
-  nlohmann::json tracks_json = {{"model", (out / "no_model.vdb").string()}, {"sequences", {sequence}}};
-  WriteTextFileAtomically((out / "tracks.json").string(), tracks_json.dump(1));
-  nlohmann::json config = {{"sequences", {fixture.sequence_dir}}, {"tracking_labels", nlohmann::json::array()}};
-  WriteTextFileAtomically((out / "config.json").string(), config.dump(1));
+  sequence.directory = fixture.sequence_dir;
+  sequence.name = name;
+  sequence.ok = true;
+  sequence.input = "fixture";
+  sequence.tracking = nlohmann::json::object();
+  TracksFile tracks_file;
+  tracks_file.model = (out / "no_model.vdb").string();
+  tracks_file.sequences.push_back(std::move(sequence));
+  WriteTracksFile((out / "tracks.json").string(), tracks_file);
+  FitConfig config;
+  config.options.model_path = tracks_file.model;
+  config.options.sequences = {fixture.sequence_dir};
+  config.options.output_dir = fixture.output_dir;
+  WriteFitConfig((out / "config.json").string(), config);
   return fixture;
 }
 

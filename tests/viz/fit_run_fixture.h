@@ -1,4 +1,5 @@
-// A `samp fit` output folder written by hand for the viz tests: a sequence
+// A `samp fit` output folder for the viz tests (tracks.json and config.json
+// written by their one writer, pipeline/): a sequence
 // directory (calib, poses, image_2, detections, gt/) and OUT/ (tracks.json,
 // config.json, meshes/ with box cars and their aligned points), as
 // docs/fitting.md and docs/synthetic.md describe them. Seeded; the true values
