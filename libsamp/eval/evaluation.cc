@@ -1,7 +1,7 @@
 #include "libsamp/eval/evaluation.h"
 
-#include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -734,11 +734,6 @@ std::string EvalSummary::BriefReport() const {
 EvalSummary Evaluate(const EvalOptions& options) {
   options.Check();
   const auto start = std::chrono::steady_clock::now();
-  std::unique_ptr<tbb::global_control> threads;
-  if (options.num_threads > 0) {
-    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                    size_t(options.num_threads));
-  }
   std::vector<MethodInfo> methods;
   if (options.stereo_baseline) methods.push_back({kStereo, "", true, false});
   if (options.detection_baseline) methods.push_back({kDetections, "", false, true});
@@ -756,17 +751,22 @@ EvalSummary Evaluate(const EvalOptions& options) {
   std::set<std::string> tracks;
   std::vector<TrackingCounts> tracking(methods.size());
   Progress progress("eval sequences", int64_t(options.sequences.size()));
-  for (const std::string& sequence : options.sequences) {
-    std::vector<std::unique_ptr<ResultMeshes>> result_meshes(methods.size());
-    for (size_t m = 0; m < methods.size(); ++m) {
-      if (!methods[m].shape || methods[m].folder.empty()) continue;
-      const std::string folder = ResultFolder(methods[m].folder, ListSequence(sequence).name);
-      if (!folder.empty()) result_meshes[m] = std::make_unique<ResultMeshes>(folder);
+  // --threads workers (0 = all cores) in a task arena of this call, as samp fit
+  // and samp train do: no process-wide limit.
+  tbb::task_arena arena(options.num_threads > 0 ? options.num_threads : tbb::task_arena::automatic);
+  arena.execute([&] {
+    for (const std::string& sequence : options.sequences) {
+      std::vector<std::unique_ptr<ResultMeshes>> result_meshes(methods.size());
+      for (size_t m = 0; m < methods.size(); ++m) {
+        if (!methods[m].shape || methods[m].folder.empty()) continue;
+        const std::string folder = ResultFolder(methods[m].folder, ListSequence(sequence).name);
+        if (!folder.empty()) result_meshes[m] = std::make_unique<ResultMeshes>(folder);
+      }
+      std::vector<Record> r = EvaluateSequence(options, sequence, methods, &result_meshes, &tracks, &tracking);
+      records.insert(records.end(), std::make_move_iterator(r.begin()), std::make_move_iterator(r.end()));
+      progress.Tick();
     }
-    std::vector<Record> r = EvaluateSequence(options, sequence, methods, &result_meshes, &tracks, &tracking);
-    records.insert(records.end(), std::make_move_iterator(r.begin()), std::make_move_iterator(r.end()));
-    progress.Tick();
-  }
+  });
   progress.Finish();
 
   EvalSummary summary;
