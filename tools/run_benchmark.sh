@@ -30,6 +30,8 @@
 #   --retrain             train the model even when WORK/model_holdout.vdb is up to date
 #   --reuse-sequences     keep WORK/<run>/sequences when its config.json exists (same options
 #                         and seed give the same files; fits and evaluation are redone)
+#   --reuse-runs          keep a whole run (sequences, fits, evaluation) when its
+#                         eval/results.json exists, with its timings from WORK/timings.txt
 #   -h, --help            this text
 #
 # Every step logs its command and duration to WORK/benchmark.log. Outputs:
@@ -53,6 +55,7 @@ threads=2
 write_docs=0
 retrain=0
 reuse_sequences=0
+reuse_runs=0
 
 usage() { sed -n '2,/^set -euo/p' "${BASH_SOURCE[0]}" | sed '$d' | sed 's/^# \{0,1\}//'; }
 die() { echo "run_benchmark: error: $*" >&2; exit 1; }
@@ -74,6 +77,7 @@ while [ $# -gt 0 ]; do
     --docs) write_docs=1; shift ;;
     --retrain) retrain=1; shift ;;
     --reuse-sequences) reuse_sequences=1; shift ;;
+    --reuse-runs) reuse_runs=1; shift ;;
     -h|--help) usage; exit 0 ;;
     *) usage >&2; die "unknown option '$1'" ;;
   esac
@@ -99,7 +103,7 @@ step() {  # step NAME COMMAND...: runs, logs command and seconds
   echo "run_benchmark: $name took $((end - start)) s" | tee -a "$log"
   echo "$name $((end - start))" >> "$work/timings.txt"
 }
-: > "$work/timings.txt"
+[ "$reuse_runs" = 1 ] && [ -f "$work/timings.txt" ] || : > "$work/timings.txt"
 total_start=$(date +%s)
 
 # 0. CAD cars.
@@ -166,6 +170,10 @@ fi
 run_one() {  # run_one NAME PRESET SEED
   local name="$1" run_preset="$2" run_seed="$3"
   local dir="$work/$name"
+  if [ "$reuse_runs" = 1 ] && [ -f "$dir/eval/results.json" ]; then
+    echo "run_benchmark: $name: reusing the whole run in $dir" | tee -a "$log"
+    return 0
+  fi
   local extra=()
   [ "$run_preset" = street ] && extra=(--parked-cars "$parked_cars")
   if [ "$reuse_sequences" = 1 ] && [ -f "$dir/sequences/config.json" ]; then

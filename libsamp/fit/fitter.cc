@@ -223,6 +223,7 @@ bool FitOptions::Check() const {
       << "FitOptions.standing_speed must be >= 0";
   SAMP_CHECK(max_motion_off_axis > 0.0 && max_motion_off_axis <= M_PI / 2)
       << "FitOptions.max_motion_off_axis must be in (0, pi/2]";
+  SAMP_CHECK(positive(max_position_change)) << "FitOptions.max_position_change must be > 0";
   SAMP_CHECK(std::isfinite(min_speed_significance) && min_speed_significance >= 0.0)
       << "FitOptions.min_speed_significance must be >= 0";
   SAMP_CHECK(std::isfinite(straight_yaw_rate) && straight_yaw_rate >= 0.0)
@@ -591,6 +592,22 @@ TrackFit TrackFitter::Fit(const Track& track) const {
     }
     data = std::move(refined);
     fit.summary.solves.push_back(Solve(lookup_, track, data, 1.0, options_, &state));
+  }
+
+  // Diverged frames back to their initial pose.
+  std::vector<int> reset_frames;
+  for (int k = 0; k < num_frames; ++k) {
+    if ((state.poses[k].head<3>() - init.poses[k].head<3>()).norm() <= options_.max_position_change) continue;
+    state.poses[k] = init.poses[k];
+    if (single) state.codes[k].setZero();
+    reset_frames.push_back(track.frames[k].frame);
+  }
+  fit.summary.num_frames_reset = int(reset_frames.size());
+  if (!reset_frames.empty()) {
+    std::ostringstream list;
+    for (int f : reset_frames) list << " " << f;
+    LogWarning() << name << ": " << reset_frames.size() << " frame(s) moved more than "
+                 << options_.max_position_change << " m from the detection and were reset to it:" << list.str();
   }
 
   // Results.

@@ -83,6 +83,11 @@ struct FitOptions {
   // fit of the detections' positions over time) exceeds this many standard
   // deviations of the estimate (from the scatter of the positions about the fit).
   double min_speed_significance = 3.0;
+  // A frame whose fitted position lies farther than this from its initial
+  // one (the detection on the road) has diverged (e.g. a single-frame solve
+  // on clutter ran away): it is reset to the initial pose (single-frame mode:
+  // and the mean shape) and counted in FitSummary::num_frames_reset, m.
+  double max_position_change = 5.0;
   MotionNoise motion_noise;
   // Ceres: iterations per solve, tolerances, linear solver
   // ("sparse_normal_cholesky", "dense_schur", "iterative_schur", "dense_qr").
@@ -126,6 +131,7 @@ struct FitSummary {
   int num_iterations = 0;           // summed over solves
   double seconds = 0.0;             // whole fit including association
   bool usable = false;              // every solve usable
+  int num_frames_reset = 0;         // frames reset to their initial pose (FitOptions::max_position_change)
   std::string BriefReport() const;
 };
 

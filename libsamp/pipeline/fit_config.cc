@@ -86,6 +86,7 @@ void OptionFields(OptionsJson& io, FitOptions& o) {
   io("straight_yaw_rate", o.straight_yaw_rate);
   io("max_motion_off_axis", o.max_motion_off_axis);
   io("min_speed_significance", o.min_speed_significance);
+  io("max_position_change", o.max_position_change);
   io.Nested("motion_noise", o.motion_noise);
   io("max_iterations", o.max_iterations);
   io("max_rejected_steps", o.max_rejected_steps);

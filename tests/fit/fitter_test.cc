@@ -204,10 +204,25 @@ TEST(Fitter, StandingCarAndSingleFrameMode) {
     EXPECT_EQ(fit.frames[k].motion_model, "none");
     EXPECT_LT((fit.frames[k].position - s.poses_true[k].head<3>()).norm(), 0.2);
   }
+  EXPECT_EQ(fit.summary.num_frames_reset, 0);
   // One frame is fine in single-frame mode.
   Track one = s.track;
   one.frames.resize(1);
   EXPECT_EQ(single.Fit(one).frames.size(), 1u);
+  // A frame that runs away from its detection is reset to it: a detection
+  // 8 m off the car's points fits (if at all) metres from where it started.
+  Track far = s.track;
+  far.frames[2].detection.position.x() += 8.0;
+  options.association_radius = 12.0;  // so that the points still reach the far detection
+  const InitialState init = InitializeTrack(far, options);
+  options.max_position_change = 0.05;
+  const TrackFit reset = TrackFitter(Model(), options).Fit(far);
+  EXPECT_GE(reset.summary.num_frames_reset, 1);
+  EXPECT_LT((reset.frames[2].position - init.poses[2].head<3>()).norm(), 1e-9)
+      << "reset to the initial pose";
+  EXPECT_TRUE(reset.frames[2].shape_code.isZero()) << "and the mean shape";
+  options.max_position_change = 0.0;
+  EXPECT_THROW(options.Check(), Error);
 }
 
 TEST(Fitter, RayDistanceRemovesThePullTowardsTheCameraUnderDepthNoise) {
