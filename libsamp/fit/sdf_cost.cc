@@ -42,6 +42,27 @@ DataTerm ParseDataTerm(const std::string& name) {
   SAMP_THROW() << "unknown data term '" << name << "' (paper, ray-depth, disparity)";
 }
 
+namespace {
+
+// One point's Jacobian rows from phi's derivatives: d/dz row (already
+// d phi / dz) scaled by f, and the pose row from the spatial gradient g at the
+// object-frame point o with R_y(theta) = (c, s): R grad = (c g0 + s g2, g1,
+// -s g0 + c g2), d/dtheta = g . (-o_z, 0, o_x).
+void WriteJacobianRow(double f, double c, double s, const double* g, const double* o, int nr, double* dz_row,
+                      double* pose_row) {
+  if (dz_row) {
+    for (int r = 0; r < nr; ++r) dz_row[r] *= f;
+  }
+  if (pose_row) {
+    pose_row[0] = -f * (c * g[0] + s * g[2]);
+    pose_row[1] = -f * g[1];
+    pose_row[2] = -f * (-s * g[0] + c * g[2]);
+    pose_row[3] = f * (-g[0] * o[2] + g[2] * o[0]);
+  }
+}
+
+}  // namespace
+
 double SdfCost::MixturePsi(double s, double s0, double* d_psi) {
   const double c = std::exp(-0.5 * s0 * s0);
   const double e = std::exp(-0.5 * s * s);
@@ -140,16 +161,7 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, int begin, int e
       double d_psi = 1.0;
       residuals[row] = sqrt_weight_ * MixturePsi(ray.value, outlier_threshold_, &d_psi);
       const double f = sqrt_weight_ * d_psi * m;
-      if (dz_row) {
-        for (int r = 0; r < nr; ++r) dz_row[r] *= f;
-      }
-      if (jp) {
-        double* p = jp + size_t(row) * jp_stride;
-        p[0] = -f * (c * g[0] + s * g[2]);
-        p[1] = -f * g[1];
-        p[2] = -f * (-s * g[0] + c * g[2]);
-        p[3] = f * (-g[0] * o[2] + g[2] * o[0]);
-      }
+      WriteJacobianRow(f, c, s, g, o, nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
     }
     return true;
   }
@@ -194,17 +206,7 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, int begin, int e
     residuals[row] = sqrt_weight_ * (mixture_ ? MixturePsi(scaled, outlier_threshold_, &d_psi)
                                               : Psi(scaled, huber_, &d_psi));
     const double f = sqrt_weight_ * d_psi * inv_sigmas_[i];
-    if (dz_row) {
-      for (int r = 0; r < nr; ++r) dz_row[r] *= f;
-    }
-    if (jp) {
-      double* p = jp + size_t(row) * jp_stride;
-      // R grad = (c g0 + s g2, g1, -s g0 + c g2).
-      p[0] = -f * (c * g[0] + s * g[2]);
-      p[1] = -f * g[1];
-      p[2] = -f * (-s * g[0] + c * g[2]);
-      p[3] = f * (-g[0] * o[2] + g[2] * o[0]);
-    }
+    WriteJacobianRow(f, c, s, g, o, nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
   }
   return true;
 }
