@@ -176,8 +176,11 @@ bool SameObjectType(const std::string& a, const std::string& b) {
 }
 
 StereoCalibration ReadCalibration(const std::string& path, int image_width, int image_height) {
-  SAMP_CHECK(image_width > 0 && image_height > 0)
-      << "ReadCalibration: image size " << image_width << "x" << image_height << " must be positive";
+  const bool size_known = image_width != 0 || image_height != 0;
+  SAMP_CHECK(!size_known || (image_width > 0 && image_height > 0))
+      << "ReadCalibration: image size " << image_width << "x" << image_height
+      << " must be positive (0x0 = not known)";
+  if (!size_known) image_width = 1242, image_height = 375;
   const TextFile file = ReadTextFile(path, "calibration");
   Eigen::Matrix<double, 3, 4> p[2];
   int line_of[2] = {0, 0};
@@ -193,7 +196,13 @@ StereoCalibration ReadCalibration(const std::string& path, int image_width, int 
                                     << line_of[which] << ")";
     SAMP_CHECK(tokens.size() == 13) << At(path, n) << tokens[0] << " has " << tokens.size() - 1
                                     << " numbers, expected 12";
-    for (int k = 0; k < 12; ++k) p[which](k / 4, k % 4) = ParseDouble(tokens[k + 1], path, n, tokens[0].c_str());
+    for (int k = 0; k < 12; ++k) {
+      const double value = ParseDouble(tokens[k + 1], path, n, tokens[0].c_str());
+      SAMP_CHECK(std::abs(value) <= kMaxCalibrationValue)
+          << At(path, n) << tokens[0] << " entry (" << k / 4 << "," << k % 4 << ") = " << value
+          << " is not a plausible calibration value (|v| > " << kMaxCalibrationValue << ")";
+      p[which](k / 4, k % 4) = value;
+    }
     line_of[which] = n;
   }
   SAMP_CHECK(line_of[0] > 0) << path << ": no 'P2:' line (left camera)";
@@ -209,6 +218,16 @@ StereoCalibration ReadCalibration(const std::string& path, int image_width, int 
   SAMP_CHECK(camera.fx > 0 && camera.fy > 0)
       << At(path, line_of[0]) << "P2 focal lengths " << camera.fx << ", " << camera.fy
       << " must be positive";
+  SAMP_CHECK(camera.fx > kMinFocalLengthPx && camera.fx <= kMaxFocalLengthPx &&
+             camera.fy > kMinFocalLengthPx && camera.fy <= kMaxFocalLengthPx)
+      << At(path, line_of[0]) << "P2 focal lengths fx = " << camera.fx << ", fy = " << camera.fy
+      << " px are not plausible (must be in (" << kMinFocalLengthPx << ", " << kMaxFocalLengthPx
+      << "] px)";
+  if (size_known) {
+    SAMP_CHECK(camera.cx >= 0 && camera.cx <= image_width && camera.cy >= 0 && camera.cy <= image_height)
+        << At(path, line_of[0]) << "P2 principal point (" << camera.cx << ", " << camera.cy
+        << ") px lies outside the " << image_width << "x" << image_height << " image";
+  }
   SAMP_CHECK(std::abs(p[1](0, 0) - camera.fx) <= 1e-3 * camera.fx &&
              std::abs(p[1](0, 2) - camera.cx) <= 1.0 && std::abs(p[1](1, 2) - camera.cy) <= 1.0)
       << At(path, line_of[1]) << "P3 intrinsics differ from P2's: the pair is not rectified";
@@ -216,6 +235,9 @@ StereoCalibration ReadCalibration(const std::string& path, int image_width, int 
   SAMP_CHECK(calibration.baseline > 0)
       << path << ": baseline (P2[0,3] - P3[0,3]) / fx = " << calibration.baseline
       << " m is not positive (P3 must be the right camera)";
+  SAMP_CHECK(calibration.baseline <= kMaxBaseline)
+      << path << ": baseline (P2[0,3] - P3[0,3]) / fx = " << calibration.baseline
+      << " m is not plausible for a stereo rig (> " << kMaxBaseline << " m)";
   return calibration;
 }
 
@@ -316,8 +338,14 @@ Eigen::Vector4d ReadPlane(const std::string& path) {
   Eigen::Vector4d plane;
   for (int k = 0; k < 4; ++k) plane[k] = ParseDouble(values[k], path, n, "plane coefficient");
   const double norm = plane.head<3>().norm();
+  SAMP_CHECK(std::isfinite(norm))
+      << At(path, n) << "plane normal (" << values[0] << " " << values[1] << " " << values[2]
+      << ") cannot be scaled to unit length (its length overflows)";
   SAMP_CHECK(norm > 1e-9) << At(path, n) << "plane normal has zero length";
   plane /= norm;
+  SAMP_CHECK(std::abs(plane[3]) <= kMaxPlaneOffset)
+      << At(path, n) << "plane offset d = " << plane[3] << " m (for the unit normal) is not a road "
+      << "plane: farther than " << kMaxPlaneOffset << " m from the camera";
   if (plane[1] > 0) {
     LogDebug() << path << ": plane normal points down, flipped";
     plane = -plane;
@@ -362,6 +390,9 @@ std::vector<Eigen::Isometry3d> ReadPoses(const std::string& path) {
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(rotation, Eigen::ComputeFullU | Eigen::ComputeFullV);
     pose.linear() = svd.matrixU() * svd.matrixV().transpose();
     pose.translation() = m.col(3);
+    SAMP_CHECK(pose.translation().norm() <= kMaxPoseTranslation)
+        << At(path, n) << "translation (" << pose.translation().transpose() << ") m, |t| = "
+        << pose.translation().norm() << " m, is not an ego pose (|t| > " << kMaxPoseTranslation << " m)";
     poses.push_back(pose);
   }
   SAMP_CHECK(!poses.empty()) << path << ": no poses";

@@ -19,11 +19,20 @@ namespace samp {
 
 // Calibration file: lines "P2: 12 numbers" and "P3: 12 numbers" (3x4 row-major
 // projection matrices of the rectified left and right colour cameras); other
-// lines are ignored. Intrinsics from P2; baseline = (P2(0,3) - P3(0,3)) / fx,
-// which must be > 0. The file carries no image size: the camera gets
-// image_width x image_height (pass the size of the images when known).
-StereoCalibration ReadCalibration(const std::string& path, int image_width = 1242,
-                                  int image_height = 375);
+// lines are ignored. Intrinsics from P2; baseline = (P2(0,3) - P3(0,3)) / fx.
+// Plausibility (an error naming the file, line and value otherwise): every
+// number |v| <= kMaxCalibrationValue, focal lengths fx, fy in
+// (kMinFocalLengthPx, kMaxFocalLengthPx], baseline in (0, kMaxBaseline], and,
+// when the image size is given, the principal point inside the image
+// (0 <= cx <= width, 0 <= cy <= height). The file carries no image
+// size: the camera gets image_width x image_height; 0 x 0 = not known (KITTI's
+// 1242 x 375 is used and the principal point is not checked).
+constexpr double kMaxCalibrationValue = 1e9;
+constexpr double kMinFocalLengthPx = 1.0;
+constexpr double kMaxFocalLengthPx = 1e5;
+constexpr double kMaxBaseline = 10.0;  // m
+StereoCalibration ReadCalibration(const std::string& path, int image_width = 0,
+                                  int image_height = 0);
 // Writes "P2: ..." and "P3: ..." lines for `calibration` (P2 with zero
 // translation column, P3(0,3) = -fx * baseline).
 void WriteCalibration(const std::string& path, const StereoCalibration& calibration);
@@ -52,13 +61,18 @@ std::string FormatTrackingLabel(const ObjectLabel& label);
 // plane is n . x + d = 0 in the camera of that frame, n pointing up (towards
 // -y), so n . x + d is the height of x above the road. A plane whose normal
 // points down is flipped and reported at debug level; a normal of zero length
-// or far from vertical (|b| < 0.5) is an error.
+// or far from vertical (|b| < 0.5) is an error, and so is a normal whose
+// length overflows (|(a, b, c)| not finite) and a road farther than
+// kMaxPlaneOffset from the camera (|d| after scaling).
+constexpr double kMaxPlaneOffset = 1e4;  // m
 Eigen::Vector4d ReadPlane(const std::string& path);
 void WritePlane(const std::string& path, const Eigen::Vector4d& plane);
 
 // Poses file: one line per frame (frame 0 first), 12 numbers, the 3x4
 // row-major matrix [R | t] mapping camera-of-frame coordinates to world.
-// R must be a rotation (orthonormal within 1e-3, det > 0).
+// R must be a rotation (orthonormal within 1e-3, det > 0) and |t| at most
+// kMaxPoseTranslation (an ego pose, not a number's overflow).
+constexpr double kMaxPoseTranslation = 1e6;  // m
 std::vector<Eigen::Isometry3d> ReadPoses(const std::string& path);
 void WritePoses(const std::string& path, const std::vector<Eigen::Isometry3d>& world_from_camera);
 

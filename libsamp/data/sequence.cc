@@ -137,7 +137,9 @@ SequenceReader::SequenceReader(const std::string& directory, const SequenceOptio
   if (!size_known)
     LogInfo() << files_.name << ": no image or disparity to take the image size from, using "
               << width << "x" << height;
-  calibration_ = ReadCalibration(files_.calibration, width, height);
+  // 0x0: the size is not known, the principal point is not checked against it.
+  calibration_ = size_known ? ReadCalibration(files_.calibration, width, height)
+                            : ReadCalibration(files_.calibration);
   if (!files_.poses.empty()) {
     poses_ = ReadPoses(files_.poses);
     const int last = files_.frames.back().frame;

@@ -168,8 +168,8 @@ FitRunView LoadFitRun(const std::string& output_dir, const LoadFitRunOptions& op
     sequence.name = js.name;
     sequence.error_tau = options.error_tau;
     const SequenceFiles files = ListSequence(sequence.directory);
-    // The image size: from the first left image, else KITTI's.
-    int width = 1242, height = 375;
+    // The image size: from the first left image, else not known (KITTI's).
+    int width = 0, height = 0;
     for (const FrameFiles& f : files.frames) {
       sequence.frames.push_back(f.frame);
       if (!f.image_left.empty()) {

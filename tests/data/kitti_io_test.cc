@@ -88,6 +88,53 @@ TEST_F(KittiIoTest, CalibrationErrors) {
   ExpectError([&] { ReadCalibration((dir_ / "missing.txt").string()); }, {"cannot open", "missing.txt"});
 }
 
+// Values no camera has (issue 16: 1e300 was read and written as 300-digit
+// label coordinates) are refused with the file, line and value.
+TEST_F(KittiIoTest, CalibrationPlausibility) {
+  const std::string p3 = "P3: 700 0 600 -378 0 700 170 0 0 0 1 0\n";
+  ExpectError([&] { ReadCalibration(Write("a.txt", "P2: 1e300 0 600 0 0 1e300 170 0 0 0 1 0\n" + p3)); },
+              {"a.txt:1:", "P2: entry (0,0) = 1e+300", "not a plausible calibration value"});
+  ExpectError([&] { ReadCalibration(Write("b.txt", "P2: 700 0 600 0 0 700 170 0 0 0 1 0\n"
+                                                   "P3: 700 0 600 -378 0 700 170 1e300 0 0 1 0\n")); },
+              {"b.txt:2:", "P3: entry (1,3)"});
+  ExpectError([&] { ReadCalibration(Write("c.txt", "P2: 0.5 0 600 0 0 0.5 170 0 0 0 1 0\n"
+                                                   "P3: 0.5 0 600 -0.27 0 0.5 170 0 0 0 1 0\n")); },
+              {"c.txt:1:", "fx = 0.5", "not plausible"});
+  ExpectError([&] { ReadCalibration(Write("d.txt", "P2: 700 0 600 0 0 2e5 170 0 0 0 1 0\n" + p3)); },
+              {"d.txt:1:", "fy = 200000", "not plausible"});
+  // 700 px x 20 m: a baseline no stereo rig has.
+  ExpectError([&] { ReadCalibration(Write("e.txt", "P2: 700 0 600 0 0 700 170 0 0 0 1 0\n"
+                                                   "P3: 700 0 600 -14000 0 700 170 0 0 0 1 0\n")); },
+              {"e.txt", "baseline", "= 20 m", "not plausible"});
+  // The principal point against the image size, when it is known.
+  const std::string good = Write("f.txt", "P2: 700 0 600 0 0 700 170 0 0 0 1 0\n" + p3);
+  EXPECT_NO_THROW(ReadCalibration(good, 1242, 375));
+  EXPECT_NO_THROW(ReadCalibration(good));  // size not known: not checked
+  EXPECT_EQ(ReadCalibration(good).camera.width, 1242);
+  ExpectError([&] { ReadCalibration(good, 400, 375); }, {"f.txt:1:", "principal point (600, 170)", "400x375"});
+  ExpectError([&] { ReadCalibration(good, 1242, 120); }, {"f.txt:1:", "outside the 1242x120 image"});
+  ExpectError([&] { ReadCalibration(good, -5, 375); }, {"image size -5x375"});
+  const std::string negative = Write("g.txt", "P2: 700 0 -3 0 0 700 170 0 0 0 1 0\n"
+                                              "P3: 700 0 -3 -378 0 700 170 0 0 0 1 0\n");
+  ExpectError([&] { ReadCalibration(negative, 1242, 375); }, {"g.txt:1:", "principal point (-3, 170)"});
+}
+
+TEST_F(KittiIoTest, PlaneAndPosePlausibility) {
+  ExpectError([&] { ReadPlane(Write("a.txt", "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1 0 1e300\n")); },
+              {"a.txt:4:", "offset d = 1e+300", "not a road plane"});
+  ExpectError([&] { ReadPlane(Write("b.txt", "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1 0 -20000\n")); },
+              {"b.txt:4:", "offset d = -20000"});
+  ExpectError([&] { ReadPlane(Write("c.txt", "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1e300 0 1.65\n")); },
+              {"c.txt:4:", "-1e300", "cannot be scaled to unit length"});
+  // Scaled coefficients are the same plane: offset 1.65 m after scaling.
+  EXPECT_NEAR(ReadPlane(Write("d.txt", "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1e5 0 1.65e5\n"))[3], 1.65, 1e-12);
+  ExpectError([&] { ReadPoses(Write("e.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1e300 0 1 0 0 0 0 1 0\n")); },
+              {"e.txt:2:", "not an ego pose"});
+  ExpectError([&] { ReadPoses(Write("f.txt", "1 0 0 0 0 1 0 -2e6 0 0 1 0\n")); },
+              {"f.txt:1:", "|t| = 2e+06 m", "not an ego pose"});
+  EXPECT_EQ(ReadPoses(Write("g.txt", "1 0 0 9e5 0 1 0 0 0 0 1 0\n")).size(), 1u);
+}
+
 const char* kDetection = "car -1 -1 -0.26 603.13 176.77 847.43 264.91 1.53 1.63 3.88 1.80 1.66 13.30 -0.13 0.999\n";
 
 TEST_F(KittiIoTest, LabelsGood) {

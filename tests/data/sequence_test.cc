@@ -312,6 +312,16 @@ TEST_F(SequenceTest, BadInputNamesTheFile) {
   ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "no calib/ folder");
 }
 
+// The sequence reader knows the image size (from image_2/) and checks the
+// calibration's principal point against it.
+TEST_F(SequenceTest, PrincipalPointOutsideTheImageNamesTheFile) {
+  StereoCalibration c = SmallCalibration();
+  c.camera.cx = 5000;
+  WriteCalibration((dir_ / "calib" / "000007.txt").string(), c);
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "principal point (5000");
+  ExpectError([&] { SequenceReader reader(dir_.string(), SequenceOptions()); }, "calib/000007.txt:1:");
+}
+
 TEST_F(SequenceTest, MalformedPlaneNamesTheFile) {
   std::ofstream((dir_ / "planes" / (Tag(0) + ".txt")).string()) << "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1 0\n";
   ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "000007_00.txt:4: 3 numbers");
