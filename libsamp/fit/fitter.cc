@@ -253,6 +253,18 @@ std::string FitSummary::BriefReport() const {
   return s.str();
 }
 
+std::string FitSummary::UnusableReason() const {
+  if (solves.empty()) return "no solve was run";
+  for (size_t k = 0; k < solves.size(); ++k) {
+    if (solves[k].usable) continue;
+    std::ostringstream s;
+    s << "solve " << k + 1 << " of " << solves.size() << (k == 0 ? " (initial)" : " (EM)")
+      << " is not usable: " << (solves[k].termination.empty() ? "no termination reported" : solves[k].termination);
+    return s.str();
+  }
+  return "";
+}
+
 Eigen::Isometry3d FrameFit::WorldFromObject() const { return samp::WorldFromObject(position, yaw); }
 
 InitialState InitializeTrack(const Track& track, const FitOptions& options) {

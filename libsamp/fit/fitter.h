@@ -133,6 +133,10 @@ struct FitSummary {
   bool usable = false;              // every solve usable
   int num_frames_reset = 0;         // frames reset to their initial pose (FitOptions::max_position_change)
   std::string BriefReport() const;
+  // Why the fit cannot be reported as fitted: the first solve Ceres marks not
+  // usable (IsSolutionUsable() false: its number and termination), or no solve
+  // at all. Empty when every solve is usable.
+  std::string UnusableReason() const;
 };
 
 struct FrameFit {

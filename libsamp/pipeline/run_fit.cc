@@ -125,6 +125,13 @@ void FitSequence(const RunFitOptions& options, const TrackFitter* fitter, size_t
       LogWarning() << result.name << ": track " << tracks[t].id << " skipped: " << errors[t];
       continue;
     }
+    const std::string unusable = fits[t].summary.UnusableReason();
+    if (!unusable.empty()) {
+      // Ceres' result is not a solution: a failed track, not written as fitted.
+      result.track_failures.push_back("track " + std::to_string(tracks[t].id) + ": " + unusable);
+      LogWarning() << result.name << ": track " << tracks[t].id << " failed: " << unusable;
+      continue;
+    }
     try {
       const TrackFit& fit = fits[t];
       const std::vector<ObjectLabel> track_labels = FitToLabels(fit, tracks[t], fitter->lookup());

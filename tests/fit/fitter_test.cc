@@ -368,6 +368,26 @@ TEST(Fitter, OneFrameTrackInJointModeIsTheSingleFrameProblem) {
   EXPECT_LT((joint.shape_code - single.shape_code).cwiseQuotient(lookup.sigmas()).cwiseAbs().maxCoeff(), 1e-3);
 }
 
+// A solve Ceres marks not usable makes the whole fit unusable, with the
+// solve and Ceres' termination named (samp fit then counts it as failed).
+TEST(Fitter, UnusableReasonNamesTheFirstUnusableSolve) {
+  TrackFitter fitter(Model(), FitOptions());
+  const Synthetic s = MakeTrack(fitter.lookup(), 3, 5.0, 0.0, 50, 13);
+  FitSummary summary = fitter.Fit(s.track).summary;
+  ASSERT_TRUE(summary.usable) << summary.BriefReport();
+  ASSERT_GE(summary.solves.size(), 2u);
+  EXPECT_EQ(summary.UnusableReason(), "");
+  summary.solves[1].usable = false;
+  summary.solves[1].termination = "FAILURE: Residual and Jacobian evaluation failed.";
+  const std::string reason = summary.UnusableReason();
+  EXPECT_NE(reason.find("solve 2 of " + std::to_string(summary.solves.size()) + " (EM) is not usable"),
+            std::string::npos) << reason;
+  EXPECT_NE(reason.find("FAILURE: Residual and Jacobian evaluation failed."), std::string::npos) << reason;
+  summary.solves[0].usable = false;
+  EXPECT_NE(summary.UnusableReason().find("solve 1 of"), std::string::npos);
+  EXPECT_NE(FitSummary().UnusableReason(), "");  // no solve: nothing to report as fitted
+}
+
 TEST(Fitter, BadTracksThrowWithTheirName) {
   TrackFitter fitter(Model(), FitOptions());
   Synthetic s = MakeTrack(fitter.lookup(), 3, 5.0, 0.0, 50, 13);
