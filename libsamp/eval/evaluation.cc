@@ -745,6 +745,17 @@ EvalSummary Evaluate(const EvalOptions& options) {
       if (entry.is_directory() && fs::is_directory(entry.path() / "meshes")) return true;
     return false;
   };
+  // A result folder without labels of any given sequence (a wrong path, a
+  // fit that wrote nothing) would score 0 % without a word: an error.
+  std::vector<std::string> names;
+  for (const std::string& sequence : options.sequences) names.push_back(ListSequence(sequence).name);
+  for (const auto& [name, folder] : options.results) {
+    const bool any = std::any_of(names.begin(), names.end(),
+                                 [&](const std::string& seq) { return !ResultFolder(folder, seq).empty(); });
+    SAMP_CHECK(any) << "eval: result folder " << folder << " (" << name << ") has no results for any of the "
+                    << names.size() << " sequence(s): no label_02/<seq>.txt or <seq>/label_02/<seq>.txt for "
+                    << names.front() << (names.size() > 1 ? ", ..." : "");
+  }
   for (const auto& [name, folder] : options.results) methods.push_back({name, folder, has_meshes(folder), true});
 
   std::vector<Record> records;
