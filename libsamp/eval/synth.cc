@@ -1196,12 +1196,10 @@ std::vector<SynthCar> LoadSynthCars(const SynthCarSource& source) {
                                                     << " does not exist";
     Manifest manifest;
     if (!source.manifest_path.empty()) manifest = LoadManifest(source.manifest_path);
+    // Symlinked folders are followed, each folder walked once (no copies from a loop).
     std::vector<fs::path> files;
-    for (const auto& entry : fs::recursive_directory_iterator(
-             source.cad_folder, fs::directory_options::follow_directory_symlink)) {
-      if (entry.is_regular_file() && IsMeshFile(entry.path().string())) files.push_back(entry.path());
-    }
-    std::sort(files.begin(), files.end());
+    for (const std::string& path : ListMeshFiles(source.cad_folder)) files.push_back(path);
+    std::sort(files.begin(), files.end());  // the order of fs::path, as before
     for (const fs::path& file : files) {
       const std::string relative = file.lexically_relative(source.cad_folder).generic_string();
       const ManifestEntry* entry = manifest.Find(relative);

@@ -48,16 +48,13 @@ std::vector<Job> FindJobs(const TrainOptions& options, const Manifest* manifest)
   SAMP_CHECK(fs::is_directory(folder, ec))
       << "CAD folder '" << options.cad_folder << "' is not a directory";
   std::vector<Job> jobs;
-  for (auto it = fs::recursive_directory_iterator(
-           folder, fs::directory_options::follow_directory_symlink, ec);
-       !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
-    if (!it->is_regular_file(ec) || !IsMeshFile(it->path().string())) continue;
+  // Symlinked folders are followed, each folder walked once (no copies from a loop).
+  for (const std::string& path : ListMeshFiles(options.cad_folder)) {
     Job job;
-    job.path = it->path().string();
-    job.relative_path = it->path().lexically_relative(folder).generic_string();
+    job.path = path;
+    job.relative_path = fs::path(path).lexically_relative(folder).generic_string();
     jobs.push_back(std::move(job));
   }
-  SAMP_CHECK(!ec) << "cannot list CAD folder '" << options.cad_folder << "': " << ec.message();
   std::sort(jobs.begin(), jobs.end(),
             [](const Job& a, const Job& b) { return a.relative_path < b.relative_path; });
   SAMP_CHECK(!jobs.empty()) << "no mesh files (any format assimp reads) in CAD folder '"

@@ -7,13 +7,16 @@
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <cctype>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <system_error>
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
+#include "libsamp/core/log.h"
 
 namespace samp {
 namespace {
@@ -137,6 +140,45 @@ Mesh LoadMesh(const std::string& path) {
     SAMP_CHECK(v.allFinite()) << "mesh '" << path << "' has non-finite vertex coordinates";
   }
   return mesh;
+}
+
+std::vector<std::string> ListMeshFiles(const std::string& folder) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  SAMP_CHECK(fs::is_directory(folder, ec)) << "'" << folder << "' is not a directory";
+  std::set<fs::path> walked;     // canonical paths of the folders walked
+  std::deque<fs::path> pending;  // folders to walk; symlinked ones are appended
+  pending.push_back(folder);
+  std::vector<std::string> files;
+  while (!pending.empty()) {
+    const fs::path dir = pending.front();
+    pending.pop_front();
+    const fs::path canonical = fs::canonical(dir, ec);
+    SAMP_CHECK(!ec) << "cannot resolve folder '" << dir.string() << "': " << ec.message();
+    if (!walked.insert(canonical).second) {
+      LogWarning() << "skipping '" << dir.string() << "': it leads to '" << canonical.string()
+                   << "', a folder already walked (a symlink loop or a second link)";
+      continue;
+    }
+    std::vector<fs::path> entries;
+    for (fs::directory_iterator it(dir, ec); !ec && it != fs::directory_iterator(); it.increment(ec))
+      entries.push_back(it->path());
+    SAMP_CHECK(!ec) << "cannot list folder '" << dir.string() << "': " << ec.message();
+    std::sort(entries.begin(), entries.end());
+    std::vector<fs::path> real_dirs, linked_dirs;
+    for (const fs::path& entry : entries) {
+      if (fs::is_directory(entry, ec)) {
+        (fs::is_symlink(entry, ec) ? linked_dirs : real_dirs).push_back(entry);
+      } else if (fs::is_regular_file(entry, ec) && IsMeshFile(entry.string())) {
+        files.push_back(entry.string());
+      }
+    }
+    // Real subfolders first (depth first), links after every real folder.
+    pending.insert(pending.begin(), real_dirs.begin(), real_dirs.end());
+    pending.insert(pending.end(), linked_dirs.begin(), linked_dirs.end());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
 }
 
 bool IsMeshFile(const std::string& path) {

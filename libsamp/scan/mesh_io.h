@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "libsamp/core/mesh.h"
 
@@ -18,6 +19,15 @@ Mesh LoadMesh(const std::string& path);
 // or for a .json file whose first 64 KiB name a "vertices" or "faces" key
 // (an ApolloCar3D model; manifests and other JSON files are not meshes).
 bool IsMeshFile(const std::string& path);
+
+// The mesh files (IsMeshFile) under `folder`, recursively, sorted by path and
+// named through `folder` (symlinks kept in the names). Symlinked folders are
+// followed, after the real ones, but each folder (by its canonical path) is
+// walked once: a folder reached again through a link (a loop back to a
+// parent, a second link to the same folder) is skipped with one warning
+// naming the link and its target. Throws samp::Error naming the folder when
+// `folder` is not a directory or a folder cannot be listed.
+std::vector<std::string> ListMeshFiles(const std::string& folder);
 
 // One ApolloCar3D car model (the dataset's car_models_json/<name>.json):
 // a JSON object with "vertices" ([[x, y, z], ...] in metres) and "faces"

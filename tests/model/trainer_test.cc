@@ -167,6 +167,21 @@ TEST_F(TrainerTest, FailsClearlyWithTooFewUsableModels) {
   }
 }
 
+// Issue 16: a symlink loop trained on copies of the same meshes. Links to
+// folders already walked add nothing: still the 8 files of the folder.
+TEST_F(TrainerTest, SymlinkLoopsAddNoCopies) {
+  fs::create_directory_symlink(cad_, cad_ / "sub" / "loop");
+  fs::create_directory_symlink(cad_ / "sub", cad_ / "again");
+  options_.pca.num_components = 6;  // fails after the scans: the count of models is in the message
+  try {
+    TrainShapeModel(options_);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("only 6 of 8 models are usable"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST_F(TrainerTest, QualityGateSkipsAShapeInTwoPiecesAndListsIt) {
   // Two boxes 1.2 m apart: a 4.6 m "car" whose inside is two equal components.
   Mesh twins = MakeBoxMesh(Eigen::Vector3d(-2.3, -0.9, 0.0), Eigen::Vector3d(-0.6, 0.9, 1.4));

@@ -47,6 +47,35 @@ TEST(MeshIo, LoadsObjTriangulatedWithoutLinesAndPoints) {
   fs::remove_all(dir);
 }
 
+// Issue 16: a symlink loop in a CAD folder trained on 246 copies of 6 meshes.
+// Every folder is walked once, real folders before links.
+TEST(MeshIo, ListMeshFilesWalksEveryFolderOnceThroughSymlinks) {
+  const fs::path dir = test::TempDir("walk");
+  const fs::path root = dir / "cad", outside = dir / "outside";
+  fs::create_directories(root / "a");
+  fs::create_directories(root / "b" / "sub");
+  fs::create_directories(outside / "x");
+  test::WriteText(root / "a" / "car.obj", kCubeObj);
+  test::WriteText(root / "b" / "sub" / "car2.obj", kCubeObj);
+  test::WriteText(root / "README.txt", "not a mesh\n");
+  test::WriteText(outside / "x" / "car3.obj", kCubeObj);
+  fs::create_directory_symlink(root, root / "loop");                 // back to the root
+  fs::create_directory_symlink("../..", root / "b" / "sub" / "up");  // relative loop
+  fs::create_directory_symlink(root / "b", root / "a" / "alias_b");  // a second way to b/, sorted before b/
+  fs::create_directory_symlink(outside, root / "ext");               // outside: followed once
+  fs::create_directory_symlink(outside / "x", root / "ext2");        // inside what ext walks
+  fs::create_symlink(root / "a" / "car.obj", root / "b" / "linked_file.obj");  // a file link is a file
+  const std::vector<std::string> files = ListMeshFiles(root.string());
+  std::vector<std::string> relative;
+  for (const std::string& f : files) relative.push_back(fs::path(f).lexically_relative(root).generic_string());
+  const std::vector<std::string> expected = {"a/car.obj", "b/linked_file.obj", "b/sub/car2.obj",
+                                             "ext/x/car3.obj"};
+  EXPECT_EQ(relative, expected);
+  EXPECT_THROW(ListMeshFiles((root / "a" / "car.obj").string()), Error);
+  EXPECT_THROW(ListMeshFiles((dir / "missing").string()), Error);
+  fs::remove_all(dir);
+}
+
 TEST(MeshIo, LoadsOff) {
   const fs::path dir = test::TempDir("off");
   test::WriteText(dir / "tet.off",
