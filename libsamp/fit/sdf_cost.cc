@@ -176,11 +176,15 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, int begin, int e
     double phi = lookup_->EvaluateDense(phi_z, o, jp ? g : nullptr, dz_row);
     if (!std::isfinite(phi)) return false;
     if (!rays_.empty() && phi != 0.0) {
-      // Distance along the viewing ray (capped at kMaxRayRatio |phi|).
+      // Distance along the viewing ray (searched up to kMaxRayRatio |phi|).
+      // Without a crossing there (the ray passes the shape, or the point lies
+      // behind its far side) the point keeps the Euclidean phi of the paper's
+      // term (m = 1): a lower bound of any distance to the surface, and no
+      // stronger pull towards such points than the paper's term has.
       const double* w = &rays_[3 * i];
       const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
       double distance, crossing[3];
-      double m = kMaxRayRatio;  // the cap: kMaxRayRatio phi at o
+      double m = 1.0;
       double g_crossing[3];
       if (RayDistance(phi_z, o, phi, u, &distance, crossing, g_crossing)) {
         // phi_eff = sign(phi) distance; by implicit differentiation of
@@ -193,13 +197,11 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, int begin, int e
         }
         if (dz_row) lookup_->EvaluateDense(phi_z, crossing, nullptr, dz_row);
         phi = phi < 0.0 ? -distance : distance;
-      } else {
-        phi *= m;  // g (when needed) and dz_row are phi's at o
-      }
-      for (int a = 0; a < 3; ++a) g[a] *= m;
-      if (dz_row) {
-        for (int r = 0; r < nr; ++r) dz_row[r] *= m;
-      }
+        for (int a = 0; a < 3; ++a) g[a] *= m;
+        if (dz_row) {
+          for (int r = 0; r < nr; ++r) dz_row[r] *= m;
+        }
+      }  // else: phi, g (when needed) and dz_row stay phi's at o
     }
     double d_psi = 1.0;
     const double scaled = phi * inv_sigmas_[i];  // s_i = phi / sigma_i

@@ -30,7 +30,11 @@
 // pulls the fit towards the camera; the ray depth keeps growing. By implicit
 // differentiation of phi_z(c) = 0 (m = -1 / (grad phi(c) . u), clamped to
 // <= 1 / 0.2), the Jacobians are those of phi above taken at c (with c in the
-// d/dtheta term) and multiplied by m.
+// d/dtheta term) and multiplied by m. An outside point whose ray (away from
+// the camera) finds no crossing within 5 |phi| (the ray passes the shape, or
+// the point lies behind its far side) keeps the Euclidean phi (the paper's
+// residual): before, it counted 5 phi, which pulled the shape towards clutter
+// beside the car and made shapes grow (docs/fitting.md, "Known bias").
 //
 // Data term kDisparity (the fitter's default, docs/fitting.md): every point
 // is compared with the shape's visible surface on its own viewing ray, in

@@ -193,7 +193,8 @@ TEST(SdfCost, RayDistanceResidualsAndJacobians) {
     const double* params[2] = {z.data(), pose};
     ASSERT_TRUE(cost.Evaluate(params, residuals.data(), nullptr));
     // Residuals: the signed distance along the ray (towards the camera from
-    // inside, away from it outside), capped at 5 |phi|.
+    // inside, away from it outside) when it reaches the surface within 5 |phi|,
+    // else the Euclidean phi (the paper's residual).
     const Eigen::Isometry3d object_from_world = ObjectFromWorld(Eigen::Vector3d(pose[0], pose[1], pose[2]), pose[3]);
     int num_inside = 0, num_hits = 0;
     for (size_t i = 0; i < points.size(); ++i) {
@@ -203,7 +204,7 @@ TEST(SdfCost, RayDistanceResidualsAndJacobians) {
       num_inside += phi < 0.0;
       const double d = BruteForceRayDistance(lookup, z, o, phi < 0.0 ? Eigen::Vector3d(-u) : u, 5 * std::abs(phi));
       num_hits += d >= 0.0;
-      const double expected_phi = d >= 0.0 ? (phi < 0.0 ? -d : d) : 5.0 * phi;
+      const double expected_phi = d >= 0.0 ? (phi < 0.0 ? -d : d) : phi;
       const double scaled = expected_phi / sigmas[i];
       const double expected = std::sqrt(options.weight / points.size()) *
                               (mixture ? SdfCost::MixturePsi(scaled, options.outlier_threshold, nullptr)
