@@ -19,6 +19,9 @@
 #   --work DIR            working folder (default: $SAMP_DATA_DIR/benchmark, or ~/.cache/samp/benchmark)
 #   --holdout "A B ..."   Debian test cars (default: acura-nsx-sz car5-trb1, race-only bodies the
 #                         road-traffic manifest skips anyway)
+#   --size-variants "L H W; ..."  size variants of the training cars (samp train --size-variant;
+#                         docs/training.md): default "1.15 1.0 1.05; 1.0 1.2 1.05; 1.12 1.25 1.12",
+#                         "" = the CAD cars alone
 #   --preset P            synth preset: street (default) or clean
 #   --sequences N         synthetic sequences per seed (default 24)
 #   --cars-per-sequence K traffic cars per sequence (default 3)
@@ -56,6 +59,7 @@ write_docs=0
 retrain=0
 reuse_sequences=0
 reuse_runs=0
+size_variants="1.15 1.0 1.05; 1.0 1.2 1.05; 1.12 1.25 1.12"
 
 usage() { sed -n '2,/^set -euo/p' "${BASH_SOURCE[0]}" | sed '$d' | sed 's/^# \{0,1\}//'; }
 die() { echo "run_benchmark: error: $*" >&2; exit 1; }
@@ -67,6 +71,7 @@ while [ $# -gt 0 ]; do
     --work) work="$2"; shift 2 ;;
     --holdout) holdout="$2"; shift 2 ;;
     --no-road-cars) road_cars=0; shift ;;
+    --size-variants) size_variants="$2"; shift 2 ;;
     --preset) preset="$2"; shift 2 ;;
     --sequences) sequences="$2"; shift 2 ;;
     --cars-per-sequence) cars_per_sequence="$2"; shift 2 ;;
@@ -104,7 +109,6 @@ step() {  # step NAME COMMAND...: runs, logs command and seconds
   echo "$name $((end - start))" >> "$work/timings.txt"
 }
 [ "$reuse_runs" = 1 ] && [ -f "$work/timings.txt" ] || : > "$work/timings.txt"
-total_start=$(date +%s)
 
 # 0. CAD cars.
 if [ -z "$cad" ]; then
@@ -149,20 +153,36 @@ missing = holdout - found
 if missing:
     sys.exit("hold-out cars not in the manifest: " + ", ".join(sorted(missing)))
 json.dump(m, open(target, "w"), indent=2)
-# R = 5 components need >= 6 training cars; with fewer, R = cars - 1.
 used = sum(1 for entry in m["models"] if not entry.get("skip"))
-open(target + ".rank", "w").write(str(max(1, min(5, used - 1))))
+open(target + ".used", "w").write(str(used))
 EOF
-rank=$(cat "$train_manifest.new.rank")
-rm -f "$train_manifest.new.rank"
-echo "run_benchmark: training cars of the manifest: R = $rank components" | tee -a "$log"
+used_cars=$(cat "$train_manifest.new.used")
+rm -f "$train_manifest.new.used"
+variant_args=()
+IFS=';' read -ra variant_list <<< "$size_variants"
+for v in "${variant_list[@]}"; do
+  read -ra factors <<< "$v"
+  [ "${#factors[@]}" = 0 ] && continue
+  [ "${#factors[@]}" = 3 ] || die "--size-variants: '$v' is not three factors (length height width)"
+  variant_args+=(--size-variant "${factors[@]}")
+done
+# R = 5 components need >= 6 training shapes (cars and their size variants); with fewer, R = shapes - 1.
+shapes=$((used_cars * (1 + ${#variant_args[@]} / 4)))
+rank=$((shapes - 1 < 5 ? shapes - 1 : 5))
+[ "$rank" -ge 1 ] || rank=1
+echo "run_benchmark: $used_cars training cars of the manifest, $shapes shapes: R = $rank components; size variants: ${size_variants:-none}" \
+  | tee -a "$log"
 model="$work/model_holdout.vdb"
-if [ "$retrain" = 1 ] || [ ! -f "$model" ] || ! cmp -s "$train_manifest.new" "$train_manifest"; then
+echo "$rank ${variant_args[*]:-}" > "$train_manifest.new.args"
+if [ "$retrain" = 1 ] || [ ! -f "$model" ] || ! cmp -s "$train_manifest.new" "$train_manifest" \
+  || ! cmp -s "$train_manifest.new.args" "$train_manifest.args"; then
   mv "$train_manifest.new" "$train_manifest"
+  mv "$train_manifest.new.args" "$train_manifest.args"
   rm -f "$model"
-  step "train" "$samp" train "$cad" --manifest "$train_manifest" -R "$rank" -o "$model" --threads "$threads" -q
+  step "train" "$samp" train "$cad" --manifest "$train_manifest" -R "$rank" "${variant_args[@]}" -o "$model" \
+    --threads "$threads" -q
 else
-  rm -f "$train_manifest.new"
+  rm -f "$train_manifest.new" "$train_manifest.new.args"
   echo "run_benchmark: train: $model is up to date (--retrain to redo)" | tee -a "$log"
 fi
 
@@ -207,7 +227,8 @@ if [ "$clean_comparison" = 1 ] && [ "$preset" != clean ]; then
   run_one "clean_$first_seed" clean "$first_seed"
   runs+=("clean_$first_seed")
 fi
-total=$(( $(date +%s) - total_start ))
+# The steps of this run and of the runs it reused (WORK/timings.txt).
+total=$(awk '{s += $2} END {print s + 0}' "$work/timings.txt")
 echo "run_benchmark: total $total s" | tee -a "$log"
 cat "$work/seed_$first_seed/eval/results.md"
 
@@ -219,6 +240,7 @@ if [ "$write_docs" = 1 ]; then
   done
   python3 "$root/tools/benchmark_report.py" --results "$root/docs/results.md" --work "$work" \
     --runs "${runs[*]}" --test-cars "$test_cars" --holdout "$holdout" --preset "$preset" \
+    --size-variants "$size_variants" --rank "$rank" \
     --sequences "$sequences" --cars "$cars_per_sequence" --parked "$parked_cars" --threads "$threads" \
     --total "$total" --cores "$(nproc)"
   echo "run_benchmark: wrote $root/docs/results.md and docs/images/benchmark_*.png"

@@ -40,7 +40,29 @@ struct Job {
   CanonicalizeOptions canonicalize;
   bool skip = false;
   std::string skip_reason;
+  Eigen::Vector3d size_factors = Eigen::Vector3d::Ones();  // TrainOptions::size_variants
 };
+
+std::string VariantName(const std::string& name, const Eigen::Vector3d& f) {
+  char suffix[64];
+  std::snprintf(suffix, sizeof(suffix), "@%.2fx%.2fx%.2f", f.x(), f.y(), f.z());
+  return name + suffix;
+}
+
+// Each usable job, then one stretched copy per size variant of it.
+std::vector<Job> AddSizeVariants(std::vector<Job> jobs, const std::vector<Eigen::Vector3d>& variants) {
+  const size_t originals = jobs.size();
+  for (const Eigen::Vector3d& f : variants) {
+    for (size_t i = 0; i < originals; ++i) {
+      if (jobs[i].skip) continue;
+      Job copy = jobs[i];
+      copy.name = VariantName(jobs[i].name, f);
+      copy.size_factors = f;
+      jobs.push_back(std::move(copy));
+    }
+  }
+  return jobs;
+}
 
 std::vector<Job> FindJobs(const TrainOptions& options, const Manifest* manifest) {
   const fs::path folder(options.cad_folder);
@@ -132,6 +154,10 @@ void TrainOptions::Check() const {
   scan.Check();
   sdf.Check();
   gate.Check();
+  for (const Eigen::Vector3d& f : size_variants) {
+    SAMP_CHECK(f.allFinite() && f.minCoeff() >= 0.5 && f.maxCoeff() <= 2.0)
+        << "train: size variant factors (length, height, width) must be in [0.5, 2], got " << f.transpose();
+  }
   pca.Check();
   if (!preset.empty()) CanonicalPreset(preset);  // throws naming the known presets
 }
@@ -161,6 +187,9 @@ std::string TrainOptions::ToJson() const {
                {"min_closing_agreement", gate.min_closing_agreement},
                {"borderline_closing_agreement", gate.borderline_closing_agreement}};
   j["pca"] = {{"num_components", pca.num_components}};
+  nlohmann::json variants = nlohmann::json::array();
+  for (const Eigen::Vector3d& f : size_variants) variants.push_back(Vector3Json(f));
+  j["size_variants"] = variants;
   return DumpJson(j);
 }
 
@@ -202,6 +231,13 @@ TrainOptions TrainOptionsFromJson(const std::string& json, const std::string& so
   gate.Read("min_closing_agreement", &o.gate.min_closing_agreement);
   gate.Read("borderline_closing_agreement", &o.gate.borderline_closing_agreement);
   j.Object("pca").Read("num_components", &o.pca.num_components);
+  // Model files written before size variants existed have no key: none were used.
+  if (j.Has("size_variants")) {
+    for (const std::vector<double>& f : j.Get<std::vector<std::vector<double>>>("size_variants")) {
+      SAMP_CHECK(f.size() == 3) << j.Where() << ": each entry of 'size_variants' must have 3 factors";
+      o.size_variants.emplace_back(f[0], f[1], f[2]);
+    }
+  }
   return o;
 }
 
@@ -254,7 +290,8 @@ TrainSummary TrainShapeModel(const TrainOptions& options) {
   Manifest manifest;
   const bool has_manifest = !options.manifest_path.empty();
   if (has_manifest) manifest = LoadManifest(options.manifest_path);
-  const std::vector<Job> jobs = FindJobs(options, has_manifest ? &manifest : nullptr);
+  const std::vector<Job> jobs =
+      AddSizeVariants(FindJobs(options, has_manifest ? &manifest : nullptr), options.size_variants);
   const int num_jobs = int(jobs.size());
   LogInfo() << "training a shape model from " << num_jobs << " mesh files in "
             << options.cad_folder << " on the grid " << options.grid.ToString();
@@ -265,6 +302,7 @@ TrainSummary TrainShapeModel(const TrainOptions& options) {
   for (int i = 0; i < num_jobs; ++i) {
     summary.shapes[i].name = jobs[i].name;
     summary.shapes[i].file = jobs[i].relative_path;
+    summary.shapes[i].size_factors = jobs[i].size_factors;
     if (jobs[i].skip) {
       summary.shapes[i].reject_reason = "skipped by the manifest: " + jobs[i].skip_reason;
       LogWarning() << "skipping " << jobs[i].relative_path << ": "
@@ -286,7 +324,13 @@ TrainSummary TrainShapeModel(const TrainOptions& options) {
       const auto model_start = Clock::now();
       try {
         const Mesh cad_mesh = LoadMesh(job.path);
-        const CanonicalizeResult canonical = Canonicalize(cad_mesh, job.canonicalize);
+        CanonicalizeResult canonical = Canonicalize(cad_mesh, job.canonicalize);
+        if (job.size_factors != Eigen::Vector3d::Ones()) {
+          // Canonical frame: x front (length), y down (height), z left (width),
+          // origin at the bottom centre, which the stretch keeps in place.
+          canonical.mesh.Transform(Eigen::Affine3d(job.size_factors.asDiagonal()));
+          canonical.size = canonical.size.cwiseProduct(job.size_factors);
+        }
         for (const std::string& warning : canonical.warnings) {
           LogWarning() << job.relative_path << ": " << warning;
         }

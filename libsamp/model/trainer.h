@@ -26,6 +26,12 @@ struct TrainOptions {
   SdfOptions sdf;
   SdfQualityOptions gate;         // per-SDF quality gate (docs/training.md)
   PcaOptions pca;
+  // Size augmentation (docs/training.md, "Size variants"): besides each usable
+  // CAD car as it is, one copy per entry stretched by these factors of
+  // (length, height, width) about the canonical origin (the bottom centre),
+  // named "<name>@<l>x<h>x<w>". Five CAD cars span a narrow band of sizes;
+  // real traffic has vans, SUVs and pickups. Empty (the default) = none.
+  std::vector<Eigen::Vector3d> size_variants;
   int num_threads = 0;            // 0 = all cores
   bool show_progress = true;
 
@@ -46,6 +52,7 @@ struct TrainedShape {
   bool used = false;
   std::string reject_reason;      // why it was skipped, when !used
   double scale = 1.0;
+  Eigen::Vector3d size_factors = Eigen::Vector3d::Ones();  // a size variant's stretch (l, h, w)
   Eigen::Vector3d size = Eigen::Vector3d::Zero();  // length, height, width after canonicalisation
   double inside_fraction = 0.0;
   SdfQuality quality;             // the gate's figures (when an SDF was computed)

@@ -237,6 +237,54 @@ TEST_F(TrainerTest, ApolloCar3DPresetTrainsOnCarModelsJson) {
   EXPECT_THROW(TrainShapeModel(options), Error);
 }
 
+// Size variants: one stretched copy of every usable car per variant, named
+// after its factors, with the stretched size; the stretch keeps the bottom
+// centre: a taller variant reaches higher and no lower.
+TEST_F(TrainerTest, SizeVariantsAddStretchedCopiesOfEveryUsableCar) {
+  options_.size_variants = {Eigen::Vector3d(1.1, 1.25, 1.05)};
+  options_.sdf_folder.clear();
+  const TrainSummary summary = TrainShapeModel(options_);
+  EXPECT_EQ(summary.num_used, 12) << summary.BriefReport();
+  const TrainedShape* box1 = FindShape(summary, "box1");
+  const TrainedShape* tall = FindShape(summary, "box1@1.10x1.25x1.05");
+  ASSERT_NE(box1, nullptr);
+  ASSERT_NE(tall, nullptr) << summary.BriefReport();
+  EXPECT_TRUE(tall->used) << tall->reject_reason;
+  EXPECT_NEAR(tall->size.x(), 4.8 * 1.1, 1e-4);
+  EXPECT_NEAR(tall->size.y(), 1.4 * 1.25, 1e-4);
+  EXPECT_NEAR(tall->size.z(), 1.9 * 1.05, 1e-4);
+  EXPECT_TRUE(tall->size_factors.isApprox(Eigen::Vector3d(1.1, 1.25, 1.05)));
+  // A file the manifest skips gets no variant; an unreadable one's variant is skipped too.
+  EXPECT_EQ(FindShape(summary, "toy@1.10x1.25x1.05"), nullptr);
+  ASSERT_NE(FindShape(summary, "broken@1.10x1.25x1.05"), nullptr);
+  EXPECT_FALSE(FindShape(summary, "broken@1.10x1.25x1.05")->used);
+  const ShapeModel model = ShapeModel::Load(options_.output_path);
+  EXPECT_EQ(model.training_shapes.size(), 12u);
+  const TrainOptions stored = TrainOptionsFromJson(model.options_json, "model");
+  ASSERT_EQ(stored.size_variants.size(), 1u);
+  EXPECT_TRUE(stored.size_variants[0].isApprox(Eigen::Vector3d(1.1, 1.25, 1.05)));
+
+  // The stretch keeps the bottom centre: in the SDFs of a variant 1.3 times
+  // as tall (1.82 m), a point 1.6 m above the origin is inside, 0.2 m above
+  // the ground still inside, and in the original (1.4 m) the first is outside.
+  options_.size_variants = {Eigen::Vector3d(1.0, 1.3, 1.0)};
+  options_.sdf_folder = (root_ / "sdf_variants").string();
+  TrainShapeModel(options_);
+  auto value_at = [&](const std::string& name, const Eigen::Vector3d& p) {
+    GridSpec spec;
+    VdbMetadata meta;
+    const auto grids = ReadVdb((fs::path(options_.sdf_folder) / (name + ".vdb")).string(), &spec, &meta);
+    const Eigen::Vector3i v = spec.ToVoxel(p).array().round().cast<int>();
+    return grids.at(0).values.at(size_t(spec.Index(v.x(), v.y(), v.z())));
+  };
+  EXPECT_LT(value_at("box1@1.00x1.30x1.00", Eigen::Vector3d(0, -1.6, 0)), 0.0f);
+  EXPECT_LT(value_at("box1@1.00x1.30x1.00", Eigen::Vector3d(0, -0.2, 0)), 0.0f);
+  EXPECT_GT(value_at("box1", Eigen::Vector3d(0, -1.6, 0)), 0.0f);
+
+  options_.size_variants = {Eigen::Vector3d(0.2, 1.0, 1.0)};
+  EXPECT_THROW(TrainShapeModel(options_), Error);
+}
+
 TEST_F(TrainerTest, RejectsBadOptionsAndFolders) {
   TrainOptions options = options_;
   options.cad_folder = (root_ / "does_not_exist").string();
@@ -266,6 +314,7 @@ TEST(TrainOptionsJson, ReadsBackWhatIsWrittenAndRejectsMissingKeys) {
   o.sdf.truncation = 0.4;
   o.sdf.carve_margin = 0.02;
   o.pca.num_components = 4;
+  o.size_variants = {Eigen::Vector3d(1.1, 1.2, 1.05)};
   const TrainOptions read = TrainOptionsFromJson(o.ToJson(), "test");
   EXPECT_EQ(read.ToJson(), o.ToJson());
   EXPECT_EQ(read.grid, o.grid);
@@ -283,6 +332,10 @@ TEST(TrainOptionsJson, ReadsBackWhatIsWrittenAndRejectsMissingKeys) {
     EXPECT_NE(message.find("sdf"), std::string::npos) << message;
     EXPECT_NE(message.find("'carve_margin'"), std::string::npos) << message;
   }
+  // Files from before size variants have no key: none were used.
+  j = nlohmann::json::parse(o.ToJson());
+  j.erase("size_variants");
+  EXPECT_TRUE(TrainOptionsFromJson(j.dump(), "old.vdb").size_variants.empty());
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 #include <iostream>
 #include <memory>
 
+#include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/model/trainer.h"
 #include "tools/samp/commands.h"
@@ -13,6 +14,7 @@ void RegisterTrainCommand(CLI::App* app) {
     TrainOptions options;
     double voxel_size = 0.1;
     int resolution = 400;
+    std::vector<std::vector<double>> size_variants;
   };
   auto args = std::make_shared<Args>();
   TrainOptions& o = args->options;
@@ -62,6 +64,11 @@ void RegisterTrainCommand(CLI::App* app) {
                       "Reject a model whose SDF has a smaller inside (negative) fraction of the grid")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 1.0));
+  command->add_option("--size-variant", args->size_variants,
+                      "Also train on each car stretched by these factors of length, height and width "
+                      "(repeatable: one copy of every car per occurrence; docs/training.md, Size variants)")
+      ->expected(3)
+      ->check(CLI::Range(0.5, 2.0));
   command->add_option("--threads", o.num_threads, "Worker threads (0 = all cores)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
@@ -70,6 +77,10 @@ void RegisterTrainCommand(CLI::App* app) {
     TrainOptions options = args->options;
     options.grid = GridSpec::CarDefault(args->voxel_size);
     options.scan.width = options.scan.height = args->resolution;
+    for (const std::vector<double>& f : args->size_variants) {
+      SAMP_CHECK(f.size() == 3) << "--size-variant takes 3 factors (length height width)";
+      options.size_variants.emplace_back(f[0], f[1], f[2]);
+    }
     options.show_progress = GetLogLevel() <= LogLevel::kInfo;
     const TrainSummary summary = TrainShapeModel(options);
     std::cout << summary.BriefReport();
