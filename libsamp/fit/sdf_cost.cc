@@ -165,6 +165,9 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, int begin, int e
     }
     return true;
   }
+  // The camera centre in the object frame (kRayDepth: points behind the far side).
+  const double cx = camera_[0] - pose[0], cy = camera_[1] - pose[1], cz = camera_[2] - pose[2];
+  const double o_cam[3] = {c * cx - s * cz, cy, s * cx + c * cz};
   for (int row = 0; row < end - begin; ++row) {
     const int i = begin + row;
     const double dx = points_[3 * i] - pose[0];
@@ -177,16 +180,29 @@ bool SdfCost::EvaluateRows(const double* z, const double* pose, int begin, int e
     if (!std::isfinite(phi)) return false;
     if (!rays_.empty() && phi != 0.0) {
       // Distance along the viewing ray (searched up to kMaxRayRatio |phi|).
-      // Without a crossing there (the ray passes the shape, or the point lies
-      // behind its far side) the point keeps the Euclidean phi of the paper's
-      // term (m = 1): a lower bound of any distance to the surface, and no
-      // stronger pull towards such points than the paper's term has.
+      // An outside point without a crossing there either lies behind the
+      // far side (its ray meets the shape before it): minus its depth behind
+      // that first crossing, like a point inside; or its ray passes the shape
+      // (beside the silhouette): the Euclidean phi of the paper's term (m = 1).
       const double* w = &rays_[3 * i];
       const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
       double distance, crossing[3];
       double m = 1.0;
       double g_crossing[3];
-      if (RayDistance(phi_z, o, phi, u, &distance, crossing, g_crossing)) {
+      bool found = RayDistance(phi_z, o, phi, u, &distance, crossing, g_crossing);
+      if (!found && phi > 0.0) {
+        double lambda, phi_min;
+        const double li = std::sqrt((o[0] - o_cam[0]) * (o[0] - o_cam[0]) + (o[1] - o_cam[1]) * (o[1] - o_cam[1]) +
+                                    (o[2] - o_cam[2]) * (o[2] - o_cam[2]));
+        if (FirstCrossing(phi_z, o_cam, u, &lambda, crossing, g_crossing, &phi_min, /*refine_miss=*/false) &&
+            lambda < li &&
+            g_crossing[0] * u[0] + g_crossing[1] * u[1] + g_crossing[2] * u[2] < -kMinRaySlope) {
+          found = true;
+          distance = li - lambda;
+          phi = -phi;  // behind the visible surface: signed like a point inside
+        }
+      }
+      if (found) {
         // phi_eff = sign(phi) distance; by implicit differentiation of
         // phi(crossing) = 0 its derivatives are those of phi at the crossing
         // times m = -1 / (grad phi . u) (RayDistance ensures grad phi . u < 0).
@@ -252,7 +268,7 @@ bool SdfCost::RayDistance(const double* phi_z, const double* o, double phi_o, co
 }
 
 bool SdfCost::FirstCrossing(const double* phi_z, const double* o_cam, const double* u, double* lambda, double* c,
-                            double* g_c, double* phi_min) const {
+                            double* g_c, double* phi_min, bool refine_miss) const {
   const GridSpec& grid = lookup_->grid();
   const Eigen::Vector3d lo = grid.MinCorner(), hi = grid.MaxCorner();
   auto at = [&](double l, double* p) {
@@ -326,6 +342,7 @@ bool SdfCost::FirstCrossing(const double* phi_z, const double* o_cam, const doub
     return true;  // the caller clamps a grazing slope
   }
   if (vs[count - 1] < 0.0) return finish_miss(ls[0]);  // inside at the box entry (a shape touching the box)
+  if (!refine_miss) return false;
   // Miss: the smallest sampled phi, refined by golden-section search in the
   // neighbouring samples' interval.
   int best = 0;

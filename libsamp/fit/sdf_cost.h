@@ -31,10 +31,14 @@
 // differentiation of phi_z(c) = 0 (m = -1 / (grad phi(c) . u), clamped to
 // <= 1 / 0.2), the Jacobians are those of phi above taken at c (with c in the
 // d/dtheta term) and multiplied by m. An outside point whose ray (away from
-// the camera) finds no crossing within 5 |phi| (the ray passes the shape, or
-// the point lies behind its far side) keeps the Euclidean phi (the paper's
-// residual): before, it counted 5 phi, which pulled the shape towards clutter
-// beside the car and made shapes grow (docs/fitting.md, "Known bias").
+// the camera) finds no crossing within 5 |phi|: when its ray meets the shape
+// before it (the point lies behind the far side), s_i = -(lambda_i -
+// lambda_s) / sigma_i with lambda_s the first crossing from the camera (as
+// the disparity term finds it), derivatives as for a point inside with c the
+// first crossing; when the ray passes the shape (beside the silhouette), the
+// Euclidean phi (the paper's residual). Before 2026-12-02 both counted 5 phi,
+// which pulled shapes towards clutter beside the car and let points behind
+// the far side cost less than their depth (docs/fitting.md, "Known bias").
 //
 // Data term kDisparity (the fitter's default, docs/fitting.md): every point
 // is compared with the shape's visible surface on its own viewing ray, in
@@ -176,9 +180,10 @@ class SdfCost : public ceres::CostFunction {
   // kDisparity: the first crossing of the ray o_cam + lambda u (object frame)
   // with the surface, from the grid box entry. Hit: *lambda = lambda_s, c and
   // grad phi at c, true. Miss: *lambda = lambda* of the smallest phi along
-  // the ray (c, g_c there, *phi_min = phi(c)), false.
+  // the ray (c, g_c there, *phi_min = phi(c)), false; without refine_miss a
+  // miss returns false at once (c, g_c, *phi_min unset).
   bool FirstCrossing(const double* phi_z, const double* o_cam, const double* u, double* lambda, double* c,
-                     double* g_c, double* phi_min) const;
+                     double* g_c, double* phi_min, bool refine_miss = true) const;
   // kDisparity residual of point i: s_i, the factor m with d s_i = m (d phi
   // at c), c (object frame) and, when g / dz_row are given, grad phi and
   // d phi / dz at c.
