@@ -207,7 +207,8 @@ run_one() {  # run_one NAME PRESET SEED
     --seed "$run_seed" --disparity sgbm -o "$dir/sequences"
   fi
   local seq_args=()
-  for s in "$dir"/sequences/[0-9][0-9][0-9][0-9][0-9][0-9]; do seq_args+=(--seq "$s"); done
+  local seq
+  for seq in "$dir"/sequences/[0-9][0-9][0-9][0-9][0-9][0-9]; do seq_args+=(--seq "$seq"); done
   step "$name/fit_full" "$samp" fit --model "$model" "${seq_args[@]}" --out "$dir/fit_full" --threads "$threads" -q
   step "$name/fit_full_paper" "$samp" fit --model "$model" "${seq_args[@]}" \
     --data-term paper --weighting mean --huber-loss --out "$dir/fit_full_paper" --threads "$threads" -q
