@@ -286,8 +286,8 @@ TEST(Fitter, ShapesLeaveTheMeanUnderStereoNoise) {
   // left for the shorter car); weighted as a mean over points (the paper's E)
   // the prior holds the shape near the mean. (With a correlation area of 1 px,
   // i.e. every point independent as the noise here is, the ray-depth term
-  // overshoots: 1.72 m fitted for 1.51 m, 1.35 m for 1.10 m, along-ray +0.22 m;
-  // docs/fitting.md, "Known bias".)
+  // overshot while points without a crossing counted 5 phi: 1.72 m fitted for
+  // 1.51 m, 1.35 m for 1.10 m, along-ray +0.22 m; docs/fitting.md, "Known bias".)
   const ShapeLookup lookup(Model());
   const int nr = lookup.num_components();
   int component = 0;
@@ -336,7 +336,14 @@ TEST(Fitter, ShapesLeaveTheMeanUnderStereoNoise) {
       const Eigen::Vector3d truth = s.poses_true[k].head<3>();
       along += (fit.frames[k].position - truth).dot(truth.normalized()) / double(fit.frames.size());
     }
-    EXPECT_LT(std::abs(along), 0.15) << "along-ray offset (+: away from the camera)";  // measured +0.14 m for the taller car
+    // The origin's offset also carries the part of the shape the prior still
+    // holds near the mean (a fitted car smaller than the true one sits with
+    // its visible surface on the data and its origin nearer): measured
+    // -0.20 m for the taller car, -0.02 m for the shorter one (2026-12-02,
+    // the far-side points measured against the first crossing; +0.14 m for
+    // the taller car when they counted 5 phi).
+    EXPECT_LT(std::abs(along), 0.25) << "along-ray offset (+: away from the camera) " << along
+                                     << ", true height " << h_true;
     options.data_weighting = DataWeighting::kMean;
     const TrackFit mean_fit = TrackFitter(Model(), options).Fit(s.track);
     const double h_mean_fit = Height(lookup, mean_fit.shape_code);
