@@ -159,15 +159,17 @@ EOF
 used_cars=$(cat "$train_manifest.new.used")
 rm -f "$train_manifest.new.used"
 variant_args=()
+num_variants=0
 IFS=';' read -ra variant_list <<< "$size_variants"
 for v in "${variant_list[@]}"; do
   read -ra factors <<< "$v"
   [ "${#factors[@]}" = 0 ] && continue
   [ "${#factors[@]}" = 3 ] || die "--size-variants: '$v' is not three factors (length height width)"
   variant_args+=(--size-variant "${factors[@]}")
+  num_variants=$((num_variants + 1))
 done
 # R = 5 components need >= 6 training shapes (cars and their size variants); with fewer, R = shapes - 1.
-shapes=$((used_cars * (1 + ${#variant_args[@]} / 4)))
+shapes=$((used_cars * (1 + num_variants)))
 rank=$((shapes - 1 < 5 ? shapes - 1 : 5))
 [ "$rank" -ge 1 ] || rank=1
 echo "run_benchmark: $used_cars training cars of the manifest, $shapes shapes: R = $rank components; size variants: ${size_variants:-none}" \
