@@ -1,6 +1,9 @@
 #include "libsamp/core/atomic_file.h"
 
+#include <dirent.h>
+#include <fcntl.h>
 #include <signal.h>
+#include <stdio.h>
 #include <unistd.h>
 
 #include <array>
@@ -27,18 +30,23 @@ constexpr size_t kMaxTemporaryPath = 4096;
 struct TemporarySlot {
   std::atomic<bool> busy{false};
   std::atomic<bool> ready{false};
+  std::atomic<bool> folder{false};  // a StagedFolder's temporary folder: removed with its contents
   char path[kMaxTemporaryPath];
 };
 std::array<TemporarySlot, kMaxLiveTemporaries> g_temporaries;
 
+// Names of temporaries: `.tmp.<pid>.<n>.<name>`, n from this counter.
+std::atomic<int> g_counter{0};
+
 // Registers `path` for removal on a signal; -1 when every slot is taken (the
 // file is then removed only by the writer or by the next run).
-int RegisterTemporary(const std::string& path) {
+int RegisterTemporary(const std::string& path, bool folder = false) {
   if (path.size() + 1 > kMaxTemporaryPath) return -1;
   for (int i = 0; i < kMaxLiveTemporaries; ++i) {
     bool expected = false;
     if (g_temporaries[i].busy.compare_exchange_strong(expected, true)) {
       std::memcpy(g_temporaries[i].path, path.c_str(), path.size() + 1);
+      g_temporaries[i].folder.store(folder);
       g_temporaries[i].ready.store(true);
       return i;
     }
@@ -52,10 +60,57 @@ void UnregisterTemporary(int slot) {
   g_temporaries[slot].busy.store(false);
 }
 
-extern "C" void RemoveTemporariesAndReraise(int signal_number) {
-  for (auto& slot : g_temporaries) {
-    if (slot.ready.load()) ::unlink(slot.path);  // async-signal-safe
+// Removes what the folder `dir_fd` holds, with async-signal-safe calls only
+// (getdents64, unlinkat, openat, close: no allocation). Best effort: another
+// thread may still be writing into the folder; what stays is an orphan that
+// the next run removes.
+void RemoveFolderContentsSignalSafe(int dir_fd, int depth) {
+  constexpr int kMaxDepth = 16;
+  if (depth > kMaxDepth) return;
+  alignas(8) char buffer[2048];
+  for (int pass = 0; pass < 4; ++pass) {
+    if (::lseek(dir_fd, 0, SEEK_SET) != 0) return;
+    bool found = false;
+    for (;;) {
+      const ssize_t n = ::getdents64(dir_fd, buffer, sizeof(buffer));
+      if (n <= 0) break;
+      for (ssize_t offset = 0; offset < n;) {
+        const auto* entry = reinterpret_cast<const struct dirent64*>(buffer + offset);
+        offset += entry->d_reclen;
+        const char* name = entry->d_name;
+        if (name[0] == '.' && (name[1] == '\0' || (name[1] == '.' && name[2] == '\0'))) continue;
+        found = true;
+        if (::unlinkat(dir_fd, name, 0) == 0) continue;
+        const int child = ::openat(dir_fd, name, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+        if (child < 0) continue;
+        RemoveFolderContentsSignalSafe(child, depth + 1);
+        ::close(child);
+        ::unlinkat(dir_fd, name, AT_REMOVEDIR);
+      }
+    }
+    if (!found) return;
   }
+}
+
+void RemoveFolderSignalSafe(const char* path) {
+  const int fd = ::open(path, O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (fd < 0) return;
+  RemoveFolderContentsSignalSafe(fd, 0);
+  ::close(fd);
+  ::rmdir(path);
+}
+
+extern "C" void RemoveTemporariesAndReraise(int signal_number) {
+  const int saved_errno = errno;
+  for (auto& slot : g_temporaries) {
+    if (!slot.ready.load()) continue;
+    if (slot.folder.load()) {
+      RemoveFolderSignalSafe(slot.path);
+    } else {
+      ::unlink(slot.path);  // async-signal-safe
+    }
+  }
+  errno = saved_errno;
   ::signal(signal_number, SIG_DFL);
   ::raise(signal_number);
 }
@@ -90,6 +145,7 @@ bool ProcessRuns(long pid) {
 
 const char* KindOf(const fs::file_status& status) {
   switch (status.type()) {
+    case fs::file_type::regular: return "a file";
     case fs::file_type::symlink: return "a symbolic link";
     case fs::file_type::directory: return "a folder";
     case fs::file_type::block:
@@ -112,7 +168,18 @@ int RemoveOrphanTemporaries(const std::string& folder) {
     const long pid = TemporaryPid(name);
     if (pid < 0 || ProcessRuns(pid)) continue;
     std::error_code type_ec;
-    if (!entry.is_regular_file(type_ec) && !entry.is_symlink(type_ec)) continue;
+    const fs::file_status status = entry.symlink_status(type_ec);
+    if (type_ec) continue;
+    if (fs::is_directory(status)) {
+      // A StagedFolder of an interrupted run: the half-written output.
+      if (fs::remove_all(entry.path(), type_ec) > 0 && !type_ec) {
+        ++removed;
+        LogWarning() << "removed " << entry.path().string()
+                     << ", a temporary folder left by an interrupted samp run (process " << pid << ")";
+      }
+      continue;
+    }
+    if (!fs::is_regular_file(status) && !fs::is_symlink(status)) continue;
     if (fs::remove(entry.path(), type_ec)) {
       ++removed;
       LogWarning() << "removed " << entry.path().string()
@@ -121,6 +188,22 @@ int RemoveOrphanTemporaries(const std::string& folder) {
   }
   return removed;
 }
+
+namespace {
+
+// RemoveOrphanTemporaries(folder) the first time this process writes there.
+void RemoveOrphanTemporariesOnce(const std::string& folder) {
+  static std::mutex cleaned_mutex;
+  static std::set<std::string> cleaned_folders;
+  std::lock_guard<std::mutex> lock(cleaned_mutex);
+  if (cleaned_folders.insert(folder).second) RemoveOrphanTemporaries(folder);
+}
+
+std::string TemporaryName(const std::string& name) {
+  return ".tmp." + std::to_string(::getpid()) + "." + std::to_string(g_counter++) + "." + name;
+}
+
+}  // namespace
 
 void RemoveTemporariesOnSignal() {
   static std::once_flag once;
@@ -135,9 +218,6 @@ void RemoveTemporariesOnSignal() {
 
 void WriteFileAtomically(const std::string& path,
                          const std::function<void(const std::string&)>& writer) {
-  static std::atomic<int> counter{0};
-  static std::mutex cleaned_mutex;
-  static std::set<std::string> cleaned_folders;
   const fs::path target(path);
   SAMP_CHECK(!target.filename().empty()) << "cannot write " << path << ": no file name";
   std::error_code ec;
@@ -151,15 +231,9 @@ void WriteFileAtomically(const std::string& path,
                     << ec.message();
   }
   const std::string folder = target.has_parent_path() ? target.parent_path().string() : ".";
-  {
-    std::lock_guard<std::mutex> lock(cleaned_mutex);
-    if (cleaned_folders.insert(folder).second) RemoveOrphanTemporaries(folder);
-  }
+  RemoveOrphanTemporariesOnce(folder);
   // The temporary keeps the target's extension: some writers pick the format from it.
-  const std::string temporary =
-      (target.parent_path() / (".tmp." + std::to_string(::getpid()) + "." +
-                               std::to_string(counter++) + "." + target.filename().string()))
-          .string();
+  const std::string temporary = (target.parent_path() / TemporaryName(target.filename().string())).string();
   const int slot = RegisterTemporary(temporary);
   try {
     writer(temporary);
@@ -183,6 +257,101 @@ void WriteTextFileAtomically(const std::string& path, const std::string& content
     out.close();
     SAMP_CHECK(out) << "error writing " << temporary;
   });
+}
+
+StagedFolder::StagedFolder(const std::string& target) {
+  SAMP_CHECK(!target.empty()) << "cannot write a folder: no path given";
+  fs::path resolved = fs::path(target).lexically_normal();
+  if (!resolved.has_filename() && resolved.has_parent_path()) resolved = resolved.parent_path();  // "out/"
+  if (resolved.filename() == "." || resolved.filename() == "..") resolved = fs::absolute(resolved).lexically_normal();
+  if (!resolved.has_filename() && resolved.has_parent_path()) resolved = resolved.parent_path();
+  std::error_code ec;
+  fs::file_status status = fs::symlink_status(resolved, ec);
+  if (fs::is_symlink(status)) {
+    const fs::path followed = fs::canonical(resolved, ec);
+    SAMP_CHECK(!ec && fs::is_directory(followed, ec))
+        << "cannot write folder " << target << ": it is a symbolic link that does not lead to a folder";
+    resolved = followed;
+    status = fs::symlink_status(resolved, ec);
+  }
+  SAMP_CHECK(!fs::exists(status) || fs::is_directory(status))
+      << "cannot write folder " << target << ": it exists and is " << KindOf(status)
+      << "; samp replaces only folders";
+  SAMP_CHECK(resolved.has_filename() && resolved.has_relative_path())
+      << "cannot write folder " << target << ": it has no parent folder to write beside";
+  target_ = resolved.string();
+  const fs::path parent = resolved.has_parent_path() ? resolved.parent_path() : fs::path(".");
+  fs::create_directories(parent, ec);
+  SAMP_CHECK(!ec) << "cannot create directory " << parent.string() << ": " << ec.message();
+  RemoveOrphanTemporariesOnce(parent.string());
+  temporary_ = (parent / TemporaryName(resolved.filename().string())).string();
+  slot_ = RegisterTemporary(temporary_, /*folder=*/true);
+  // The output keeps the target's name inside the temporary folder (what is
+  // written there may record its folder's name, e.g. a page title).
+  path_ = (fs::path(temporary_) / resolved.filename()).string();
+  fs::create_directories(path_, ec);
+  if (ec) {
+    UnregisterTemporary(slot_);
+    std::error_code ignored;
+    fs::remove_all(temporary_, ignored);
+    SAMP_THROW() << "cannot create folder " << path_ << ": " << ec.message();
+  }
+}
+
+StagedFolder::~StagedFolder() {
+  if (!temporary_.empty()) {
+    std::error_code ignored;
+    fs::remove_all(temporary_, ignored);
+  }
+  UnregisterTemporary(slot_);
+}
+
+void StagedFolder::Commit() {
+  SAMP_CHECK(!committed_) << "StagedFolder " << target_ << ": committed twice";
+  std::error_code ec;
+  const fs::file_status status = fs::symlink_status(target_, ec);
+  SAMP_CHECK(!fs::exists(status) || fs::is_directory(status))
+      << "cannot replace " << target_ << ": it is now " << KindOf(status) << "; samp replaces only folders";
+  if (fs::exists(status)) {
+    // Swap the new folder and the previous one in one step; the temporary
+    // folder then holds the previous one, removed below (or, if this process
+    // dies first, by the next run).
+    bool swapped = false;
+#ifdef RENAME_EXCHANGE
+    if (::renameat2(AT_FDCWD, path_.c_str(), AT_FDCWD, target_.c_str(), RENAME_EXCHANGE) == 0) {
+      swapped = true;
+    } else {
+      SAMP_CHECK(errno == EINVAL || errno == ENOSYS || errno == ENOTSUP)
+          << "cannot replace " << target_ << " by " << path_ << ": " << std::strerror(errno);
+    }
+#endif
+    if (!swapped) {
+      // No atomic exchange on this file system: the previous folder moves into
+      // the temporary one, then the new one into place.
+      const fs::path previous = fs::path(temporary_) / ".previous";
+      fs::rename(target_, previous, ec);
+      SAMP_CHECK(!ec) << "cannot move " << target_ << " aside: " << ec.message();
+      fs::rename(path_, target_, ec);
+      if (ec) {
+        std::error_code ignored;
+        fs::rename(previous, target_, ignored);
+        SAMP_THROW() << "cannot rename " << path_ << " to " << target_ << ": " << ec.message();
+      }
+    }
+    replaced_ = true;
+  } else {
+    fs::rename(path_, target_, ec);
+    SAMP_CHECK(!ec) << "cannot rename " << path_ << " to " << target_ << ": " << ec.message();
+  }
+  committed_ = true;
+  fs::remove_all(temporary_, ec);
+  if (ec) {
+    LogWarning() << "could not remove " << temporary_ << " (the previous contents of " << target_
+                 << "): " << ec.message() << "; the next samp run beside it removes it";
+  }
+  temporary_.clear();
+  UnregisterTemporary(slot_);
+  slot_ = -1;
 }
 
 }  // namespace samp

@@ -1,5 +1,6 @@
-// Atomic output: write to a temporary file beside the target, then rename.
-// An interrupted or failing writer never leaves a half-written target behind.
+// Atomic output: write to a temporary file (or folder) beside the target, then
+// rename. An interrupted or failing writer never leaves a half-written target
+// behind.
 #pragma once
 
 #include <functional>
@@ -29,8 +30,49 @@ void WriteTextFileAtomically(const std::string& path, const std::string& content
 // idempotent.
 void RemoveTemporariesOnSignal();
 
-// Removes `.tmp.<pid>.<n>.*` files in `folder` whose process no longer runs;
-// returns how many were removed. Called by WriteFileAtomically once per folder.
+// Removes `.tmp.<pid>.<n>.*` files and folders (StagedFolder) in `folder`
+// whose process no longer runs; returns how many were removed. Called by
+// WriteFileAtomically and StagedFolder once per folder.
 int RemoveOrphanTemporaries(const std::string& folder);
+
+// A folder written completely or not at all. The writer fills path(), a fresh
+// folder of the target's name inside a temporary folder `.tmp.<pid>.<n>.<name>`
+// beside the target; Commit() puts it in place of the target: a previous
+// folder of that name is swapped out in one step (Linux renameat2
+// RENAME_EXCHANGE; where the file system lacks it, two renames, between which
+// the target is briefly absent) and then removed with everything in it.
+// Without Commit() (an exception, a failed run) the destructor removes the
+// temporary folder and the target stays as it was. The temporary folder is
+// registered for RemoveTemporariesOnSignal (removed on SIGINT/SIGTERM/SIGHUP)
+// and one left by a kill -9 is removed by the next StagedFolder or atomic write
+// beside it (RemoveOrphanTemporaries). A target that is a symbolic link to a
+// folder is resolved (the link stays and shows the new folder); a target that
+// exists and is not a folder (a file, a device, a dangling link) is refused
+// with samp::Error, so is one without a parent (`/`). Which folders may be
+// replaced is the caller's decision (see pipeline/run_fit.h). Not thread-safe
+// for one instance; distinct instances are independent.
+class StagedFolder {
+ public:
+  explicit StagedFolder(const std::string& target);
+  ~StagedFolder();
+  StagedFolder(const StagedFolder&) = delete;
+  StagedFolder& operator=(const StagedFolder&) = delete;
+
+  // Where to write: <parent of target>/.tmp.<pid>.<n>.<name>/<name>.
+  const std::string& path() const { return path_; }
+  // The folder Commit() replaces (the resolved target).
+  const std::string& target() const { return target_; }
+  // True when Commit() replaced an existing folder.
+  bool replaced() const { return replaced_; }
+  // Moves path() to target(); throws samp::Error when the rename fails (the
+  // target then stays as it was). A failure to remove the previous folder
+  // afterwards is a warning (the next run removes it).
+  void Commit();
+
+ private:
+  std::string target_, temporary_, path_;
+  int slot_ = -1;
+  bool committed_ = false, replaced_ = false;
+};
 
 }  // namespace samp

@@ -185,6 +185,135 @@ TEST(AtomicFile, SignalRemovesTheTemporaryOfARunningWriter) {
   fs::remove_all(dir);
 }
 
+// Every path under `folder`, relative, sorted.
+std::vector<std::string> Listing(const fs::path& folder) {
+  std::vector<std::string> paths;
+  for (const auto& entry : fs::recursive_directory_iterator(folder))
+    paths.push_back(entry.path().lexically_relative(folder).string());
+  std::sort(paths.begin(), paths.end());
+  return paths;
+}
+
+// A staged folder replaces the previous one as a whole on Commit(); without
+// Commit() the previous one stays; nothing temporary is left either way.
+TEST(StagedFolder, CommitReplacesThePreviousFolderAsAWhole) {
+  const fs::path dir = TempDir("staged_commit");
+  const fs::path target = dir / "out";
+  {
+    StagedFolder first(target.string());
+    EXPECT_EQ(fs::path(first.path()).filename(), "out");
+    EXPECT_FALSE(fs::exists(target));
+    WriteTextFileAtomically(first.path() + "/old.txt", "old");
+    WriteTextFileAtomically(first.path() + "/meshes/track_1.ply", "old");
+    first.Commit();
+    EXPECT_FALSE(first.replaced());
+  }
+  EXPECT_EQ(Listing(target), (std::vector<std::string>{"meshes", "meshes/track_1.ply", "old.txt"}));
+  {
+    StagedFolder abandoned(target.string() + "/");  // a trailing slash names the same folder
+    WriteTextFileAtomically(abandoned.path() + "/new.txt", "new");
+  }
+  EXPECT_EQ(Listing(target), (std::vector<std::string>{"meshes", "meshes/track_1.ply", "old.txt"}));
+  {
+    StagedFolder second(target.string());
+    WriteTextFileAtomically(second.path() + "/new.txt", "new");
+    second.Commit();
+    EXPECT_TRUE(second.replaced());
+  }
+  EXPECT_EQ(Listing(target), (std::vector<std::string>{"new.txt"}));
+  EXPECT_EQ(ReadText(target / "new.txt"), "new");
+  EXPECT_EQ(Listing(dir), (std::vector<std::string>{"out", "out/new.txt"}));
+  // A symbolic link to a folder: the folder is replaced, the link stays.
+  const fs::path link = dir / "link";
+  fs::create_directory_symlink(target, link);
+  {
+    StagedFolder third(link.string());
+    EXPECT_EQ(fs::path(third.target()), fs::canonical(target));
+    WriteTextFileAtomically(third.path() + "/third.txt", "third");
+    third.Commit();
+  }
+  EXPECT_TRUE(fs::is_symlink(link));
+  EXPECT_EQ(Listing(link.string() + "/"), (std::vector<std::string>{"third.txt"}));
+  fs::remove_all(dir);
+}
+
+TEST(StagedFolder, RefusesTargetsThatAreNotFolders) {
+  const fs::path dir = TempDir("staged_refuse");
+  WriteTextFileAtomically((dir / "file").string(), "keep");
+  fs::create_symlink(dir / "nowhere", dir / "dangling");
+  fs::create_symlink(dir / "file", dir / "file_link");
+  for (const std::string name : {"file", "dangling", "file_link"}) {
+    try {
+      StagedFolder staged((dir / name).string());
+      ADD_FAILURE() << name << " accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find((dir / name).string()), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(StagedFolder("/"), Error);
+  EXPECT_EQ(ReadText(dir / "file"), "keep");
+  EXPECT_EQ(Listing(dir), (std::vector<std::string>{"dangling", "file", "file_link"}));
+  fs::remove_all(dir);
+}
+
+// A folder left by a process that no longer runs is removed with its
+// contents; one of a running process, and a plain folder, are kept.
+TEST(StagedFolder, OrphanFoldersOfDeadProcessesAreRemoved) {
+  const fs::path dir = TempDir("staged_orphans");
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  const fs::path orphan = dir / (".tmp." + std::to_string(child) + ".4.out");
+  const fs::path alive = dir / (".tmp." + std::to_string(::getppid()) + ".4.out");
+  for (const fs::path& p : {orphan / "out/label_02", alive / "out", dir / "out"}) fs::create_directories(p);
+  std::ofstream(orphan / "out/label_02/0001.txt") << "x";
+  EXPECT_EQ(RemoveOrphanTemporaries(dir.string()), 1);
+  EXPECT_FALSE(fs::exists(orphan));
+  EXPECT_TRUE(fs::exists(alive));
+  EXPECT_TRUE(fs::exists(dir / "out"));
+  fs::remove_all(dir);
+}
+
+// SIGINT while a staged folder is being filled (files in subfolders, one
+// atomic write still open): the temporary folder goes, the previous folder
+// stays as it was, and the process still ends by the signal.
+TEST(StagedFolder, SignalRemovesTheTemporaryFolder) {
+  const fs::path dir = TempDir("staged_signal");
+  const fs::path target = dir / "out";
+  WriteTextFileAtomically((target / "tracks.json").string(), "old");
+  int ready[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    RemoveTemporariesOnSignal();
+    StagedFolder staged(target.string());
+    for (int i = 0; i < 50; ++i) {
+      WriteTextFileAtomically(staged.path() + "/meshes/" + std::to_string(i) + "/track.ply", "half");
+    }
+    WriteFileAtomically(staged.path() + "/tracks.json", [&](const std::string& temporary) {
+      std::ofstream(temporary) << "half";
+      const char byte = 1;
+      if (::write(ready[1], &byte, 1) != 1) ::_exit(3);
+      for (;;) ::pause();
+    });
+    ::_exit(4);
+  }
+  char byte = 0;
+  ASSERT_EQ(::read(ready[0], &byte, 1), 1);
+  ASSERT_EQ(::kill(child, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status;
+  EXPECT_EQ(Listing(dir), (std::vector<std::string>{"out", "out/tracks.json"}));
+  EXPECT_EQ(ReadText(target / "tracks.json"), "old");
+  ::close(ready[0]);
+  ::close(ready[1]);
+  fs::remove_all(dir);
+}
+
 TEST(PlyIo, WritesHeaderAndBinaryBody) {
   const fs::path dir = TempDir("ply");
   const std::string path = (dir / "box.ply").string();
