@@ -8,55 +8,12 @@
 #include "libsamp/eval/evaluation.h"
 #include "libsamp/eval/synth.h"
 #include "libsamp/pipeline/run_fit.h"
-#include "libsamp/model/shape_model.h"
 #include "tests/eval/test_scene.h"
 
 namespace samp {
 namespace {
 
 namespace fs = std::filesystem;
-
-// Signed distance to the box [lo, hi].
-double BoxSdf(const Eigen::Vector3d& p, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  const Eigen::Vector3d c = 0.5 * (lo + hi), h = 0.5 * (hi - lo);
-  const Eigen::Vector3d q = (p - c).cwiseAbs() - h;
-  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
-}
-
-Eigen::VectorXf CarSdf(const GridSpec& grid, double length, double height) {
-  Eigen::VectorXf values(grid.NumVoxels());
-  for (int k = 0; k < grid.dims.z(); ++k) {
-    for (int j = 0; j < grid.dims.y(); ++j) {
-      for (int i = 0; i < grid.dims.x(); ++i) {
-        values[grid.Index(i, j, k)] = float(BoxSdf(grid.Position(i, j, k),
-                                                   Eigen::Vector3d(-0.5 * length, -height, -0.85),
-                                                   Eigen::Vector3d(0.5 * length, 0.0, 0.85)));
-      }
-    }
-  }
-  return values;
-}
-
-// A two-component model: mean = a 4.0 x 1.45 x 1.7 m box, components = length and height changes.
-ShapeModel BoxModel() {
-  ShapeModel model;
-  model.grid = GridSpec::CarDefault(0.1);
-  model.mean = CarSdf(model.grid, 4.0, 1.45);
-  Eigen::VectorXf d_length = CarSdf(model.grid, 4.2, 1.45) - model.mean;
-  Eigen::VectorXf d_height = CarSdf(model.grid, 4.0, 1.6) - model.mean;
-  const double length_norm = d_length.norm();
-  d_length /= float(length_norm);
-  d_height -= d_length * d_length.dot(d_height);
-  const double height_norm = d_height.norm();
-  d_height /= float(height_norm);
-  model.components.resize(model.mean.size(), 2);
-  model.components.col(0) = d_length;
-  model.components.col(1) = d_height;
-  // Std. dev. of 0.3 m in length and 0.1 m in height, in code units.
-  model.eigenvalues = Eigen::Vector2d(std::pow(length_norm * 0.3 / 0.2, 2), std::pow(height_norm * 0.1 / 0.15, 2));
-  model.training_shapes = {"box_a", "box_b", "box_c"};
-  return model;
-}
 
 TEST(EndToEnd, SynthFitEval) {
   const std::string root = test::MakeTempFolder("e2e");
@@ -68,7 +25,7 @@ TEST(EndToEnd, SynthFitEval) {
   const SynthSummary sequences =
       SynthesizeSequences(synth, {{"boxcar", test::MakeBoxCar(4.2)}, {"boxcar_short", test::MakeBoxCar(3.9)}});
   const std::string model_path = root + "/box_model.vdb";
-  BoxModel().Save(model_path);
+  test::MakeBoxModel().Save(model_path);
 
   EvalOptions eval;
   eval.sequences = {sequences.sequences[0].folder};

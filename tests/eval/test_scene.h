@@ -5,6 +5,7 @@
 
 #include "libsamp/core/mesh.h"
 #include "libsamp/eval/synth.h"
+#include "libsamp/model/shape_model.h"
 
 namespace samp::test {
 
@@ -16,6 +17,10 @@ Mesh MakeBoxCar(double length = 4.2);
 // the scene preset as given (street = the default of `samp synth`, with one parked car).
 SynthOptions QuickSynthOptions(const std::string& output_folder, uint64_t seed,
                                SynthScene scene = SynthScene::kStreet);
+
+// A two-component shape model of box cars: mean = a 4.0 x 1.45 x 1.7 m box,
+// components = length and height changes (std. dev. 0.3 m and 0.1 m).
+ShapeModel MakeBoxModel();
 
 // A fresh empty folder under the system temp directory.
 std::string MakeTempFolder(const std::string& name);
