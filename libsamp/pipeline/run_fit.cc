@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -17,6 +18,7 @@
 #include "libsamp/pipeline/fit_config.h"
 #include "libsamp/pipeline/fit_output.h"
 #include "libsamp/data/kitti_io.h"
+#include "libsamp/data/sequence.h"
 #include "libsamp/model/shape_model.h"
 
 namespace samp {
@@ -61,14 +63,72 @@ struct SequenceWork {
   std::vector<TracksFileTrack> tracks;  // for tracks.json
 };
 
+// True when `path` is `folder` or inside it (both absolute and normal).
+bool IsWithin(fs::path path, fs::path folder) {
+  if (!path.has_filename() && path.has_parent_path()) path = path.parent_path();  // "a/b/"
+  if (!folder.has_filename() && folder.has_parent_path()) folder = folder.parent_path();
+  const fs::path relative = path.lexically_relative(folder);
+  return !relative.empty() && *relative.begin() != "..";
+}
+
+fs::path Resolved(const std::string& path) {
+  std::error_code ec;
+  fs::path resolved = fs::weakly_canonical(fs::absolute(path), ec);
+  if (ec) resolved = fs::absolute(path).lexically_normal();
+  return resolved;
+}
+
+// Refuses an output folder that RunFit must not replace as a whole; true when
+// it holds an earlier run (to be replaced).
+bool CheckOutputFolder(const RunFitOptions& options) {
+  const std::string& out_name = options.output_dir;
+  const fs::path out = Resolved(out_name);
+  const char* why = ": samp fit replaces its output folder as a whole at the end of the run";
+  auto refuse_input = [&](const std::string& what, const std::string& path) {
+    SAMP_CHECK(path.empty() || !IsWithin(Resolved(path), out))
+        << "output folder " << out_name << " holds the input " << what << " " << path << why
+        << "; give an output folder outside the inputs";
+  };
+  for (const std::string& seq : options.sequences) refuse_input("sequence", seq);
+  for (const std::string& labels : options.tracking_labels) refuse_input("tracking label file", labels);
+  if (!options.link_only) refuse_input("model", options.model_path);
+  std::error_code ec;
+  const fs::path cwd = fs::current_path(ec);
+  SAMP_CHECK(ec || !IsWithin(cwd.lexically_normal(), out))
+      << "output folder " << out_name << " is the current folder or holds it" << why
+      << "; give another folder";
+  const fs::file_status status = fs::status(out, ec);
+  if (!fs::exists(status)) return false;
+  SAMP_CHECK(fs::is_directory(status)) << "output folder " << out_name << " exists and is not a folder";
+  const bool empty = fs::is_empty(out, ec);
+  SAMP_CHECK(!ec) << "cannot list output folder " << out_name << ": " << ec.message();
+  SAMP_CHECK(empty || (fs::is_regular_file(out / "tracks.json", ec) && fs::is_regular_file(out / "config.json", ec)))
+      << "output folder " << out_name << " is not empty and not the output of a samp fit (it has no "
+      << "tracks.json and config.json)" << why << ", and replaces only its own; give a new or empty folder";
+  return !empty;
+}
+
+// Refuses two sequences whose outputs would have the same name.
+void CheckSequenceNames(const RunFitOptions& options) {
+  std::map<std::string, size_t> first;
+  for (size_t i = 0; i < options.sequences.size(); ++i) {
+    const std::string name = SequenceOutputName(options.sequences[i]);
+    const auto [it, inserted] = first.emplace(name, i);
+    SAMP_CHECK(inserted) << "sequences " << options.sequences[it->second] << " and " << options.sequences[i]
+                         << " have the same name '" << name << "': their outputs (label_02/" << name
+                         << ".txt, meshes/" << name << "/) would overwrite each other; fit them into "
+                         << "separate output folders";
+  }
+}
+
 std::string MeshPrefix(const RunFitOptions& options, const std::string& seq, int track_id) {
   const std::string dir = options.sequences.size() > 1 ? "meshes/" + seq + "/" : "meshes/";
   return dir + "track_" + std::to_string(track_id);
 }
 
 // fitter == nullptr: link only (the tracks' detections are the labels).
-void FitSequence(const RunFitOptions& options, const TrackFitter* fitter, size_t index,
-                 SequenceWork* work) {
+void FitSequence(const RunFitOptions& options, const std::string& folder, const TrackFitter* fitter,
+                 size_t index, SequenceWork* work) {
   const auto start = std::chrono::steady_clock::now();
   SequenceFitResult& result = work->result;
   result.directory = options.sequences[index];
@@ -78,7 +138,7 @@ void FitSequence(const RunFitOptions& options, const TrackFitter* fitter, size_t
     if (!options.tracking_labels.empty()) seq_options.tracking_labels_path = options.tracking_labels[index];
     tracks = LoadSequenceTracks(result.directory, seq_options, &result.input);
     result.name = result.input.name;
-    if (result.name.empty()) result.name = fs::path(result.directory).filename().string();
+    if (result.name.empty()) result.name = SequenceOutputName(result.directory);
   } catch (const std::exception& e) {
     result.ok = false;
     result.error = e.what();
@@ -100,7 +160,7 @@ void FitSequence(const RunFitOptions& options, const TrackFitter* fitter, size_t
       return a.frame != b.frame ? a.frame < b.frame : a.track_id < b.track_id;
     });
     try {
-      WriteTrackingLabels((fs::path(options.output_dir) / "label_02" / (result.name + ".txt")).string(), labels);
+      WriteTrackingLabels((fs::path(folder) / "label_02" / (result.name + ".txt")).string(), labels);
     } catch (const std::exception& e) {
       result.ok = false;
       result.error = std::string("writing labels: ") + e.what();
@@ -140,8 +200,8 @@ void FitSequence(const RunFitOptions& options, const TrackFitter* fitter, size_t
       if (options.write_meshes) {
         const std::string prefix = MeshPrefix(options, result.name, fit.track_id);
         const Mesh mesh = FittedSurface(fitter->lookup(), fit.shape_code);
-        WritePly((fs::path(options.output_dir) / (prefix + ".ply")).string(), mesh);
-        WritePly((fs::path(options.output_dir) / (prefix + "_points.ply")).string(),
+        WritePly((fs::path(folder) / (prefix + ".ply")).string(), mesh);
+        WritePly((fs::path(folder) / (prefix + "_points.ply")).string(),
                  AlignedObservations(fit));
         record.mesh = prefix + ".ply";
         record.points = prefix + "_points.ply";
@@ -162,7 +222,7 @@ void FitSequence(const RunFitOptions& options, const TrackFitter* fitter, size_t
     return a.frame != b.frame ? a.frame < b.frame : a.track_id < b.track_id;
   });
   try {
-    WriteTrackingLabels((fs::path(options.output_dir) / "label_02" / (result.name + ".txt")).string(), labels);
+    WriteTrackingLabels((fs::path(folder) / "label_02" / (result.name + ".txt")).string(), labels);
   } catch (const std::exception& e) {
     result.ok = false;
     result.error = std::string("writing labels: ") + e.what();
@@ -172,16 +232,34 @@ void FitSequence(const RunFitOptions& options, const TrackFitter* fitter, size_t
 
 }  // namespace
 
+std::string SequenceOutputName(const std::string& directory) {
+  try {
+    const std::string name = ListSequence(directory).name;
+    if (!name.empty()) return name;
+  } catch (const std::exception&) {
+    // Not a readable sequence: its folder's name (the sequence fails later).
+  }
+  fs::path path = fs::path(directory).lexically_normal();
+  if (!path.has_filename() && path.has_parent_path()) path = path.parent_path();
+  if (path.filename() == "." || path.filename() == "..") path = fs::absolute(path).lexically_normal();
+  if (!path.has_filename() && path.has_parent_path()) path = path.parent_path();
+  return path.filename().string();
+}
+
 RunFitSummary RunFit(const RunFitOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   options.Check();
+  CheckSequenceNames(options);
+  const bool earlier_run = CheckOutputFolder(options);
   std::unique_ptr<ShapeModel> model;
   std::unique_ptr<TrackFitter> fitter;
   if (!options.link_only) {
     model = std::make_unique<ShapeModel>(ShapeModel::Load(options.model_path));
     fitter = std::make_unique<TrackFitter>(*model, options.fit);
   }
-  fs::create_directories(options.output_dir);
+  // Every file goes into `staged`, which replaces output_dir at the end.
+  StagedFolder staged(options.output_dir);
+  const std::string& folder = staged.path();
   if (options.link_only) {
     LogInfo() << "linking " << options.sequences.size() << " sequence(s) into tracks (no fit)";
   } else {
@@ -193,7 +271,7 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   std::vector<SequenceWork> work(options.sequences.size());
   tbb::task_arena arena(options.num_threads > 0 ? options.num_threads : tbb::task_arena::automatic);
   arena.execute([&] {
-    tbb::parallel_for(size_t(0), work.size(), [&](size_t i) { FitSequence(options, fitter.get(), i, &work[i]); });
+    tbb::parallel_for(size_t(0), work.size(), [&](size_t i) { FitSequence(options, folder, fitter.get(), i, &work[i]); });
   });
 
   RunFitSummary summary;
@@ -217,12 +295,28 @@ RunFitSummary RunFit(const RunFitOptions& options) {
     sequence.failed_tracks = r.track_failures;
     tracks_file.sequences.push_back(std::move(sequence));
   }
-  WriteTracksFile((fs::path(options.output_dir) / "tracks.json").string(), tracks_file);
+  WriteTracksFile((fs::path(folder) / "tracks.json").string(), tracks_file);
 
   FitConfig config;
   config.options = options;
   config.model_components = model ? model->NumComponents() : 0;
-  WriteFitConfig((fs::path(options.output_dir) / "config.json").string(), config);
+  WriteFitConfig((fs::path(folder) / "config.json").string(), config);
+
+  int num_detections = 0;
+  for (const auto& q : summary.sequences) num_detections += q.input.tracking.num_detections;
+  std::ostringstream failure;
+  if (summary.num_sequences_failed == int(summary.sequences.size())) {
+    failure << "every sequence failed";
+  } else if (!options.link_only && summary.num_tracks_fitted == 0 && num_detections > 0) {
+    failure << "no track was fitted although the input had " << num_detections << " detection(s)";
+    if (summary.num_tracks_failed > 0) failure << "; every track failed (" << summary.num_tracks_failed << ")";
+    failure << " (see the messages above and tracks.json)";
+  }
+  summary.failure = failure.str();
+  if (summary.failure.empty() && options.before_commit) options.before_commit(folder);
+  staged.Commit();
+  summary.replaced_previous_output = earlier_run && staged.replaced();
+  if (summary.replaced_previous_output) LogInfo() << "replaced " << options.output_dir << ", the output of an earlier run";
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

@@ -7,10 +7,22 @@
 //   OUT/tracks.json           per sequence and track: shape, poses, costs
 //   OUT/config.json           effective options and model file
 // Sequences and tracks run in parallel (TBB); a sequence or track that fails
-// is reported in the summary and skipped, the others complete. All files are
-// written atomically; a failed sequence writes no label file.
+// is reported in the summary and skipped, the others complete. A failed
+// sequence writes no label file.
+//
+// OUT is written completely or not at all (core/atomic_file.h StagedFolder):
+// every file goes into a temporary folder beside OUT, which replaces OUT as a
+// whole at the end, so no file of an earlier run (label_02/, meshes/,
+// pictures/, index.html) survives into a new one. A run that throws (bad
+// options, a model that does not load, a write error) or is interrupted leaves
+// OUT as it was. OUT may be a new or empty folder or the output of an earlier
+// `samp fit` (it has tracks.json and config.json); any other folder, a file,
+// a folder that holds an input (a --seq, --tracks or model file) or the
+// current folder is refused before anything is read. Two sequences whose
+// outputs would share a name (label_02/<seq>.txt) are refused too.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -39,6 +51,12 @@ struct RunFitOptions {
   // config.json): no model, no fit. The labels can be evaluated (pose and
   // tracking) or given back as --tracks.
   bool link_only = false;
+  // Called with the temporary output folder (holding every file of the run,
+  // tracks.json and config.json included) before it replaces output_dir, when
+  // the run did not fail (RunFitSummary::failure empty): what it writes there
+  // is part of the output (`samp fit --pictures --html`). If it throws,
+  // output_dir stays as it was. Not written to config.json.
+  std::function<void(const std::string& folder)> before_commit;
 
   // Throws samp::Error naming the field and the rule it broke.
   void Check() const;
@@ -61,12 +79,24 @@ struct RunFitSummary {
   int num_sequences_failed = 0;
   int num_tracks_fitted = 0;
   int num_tracks_failed = 0;
+  // Why the run as a whole failed (`samp fit` then exits 1): every sequence
+  // failed, or no track was fitted although the input had detections (every
+  // track failed or was dropped). Empty otherwise. The output is still written.
+  std::string failure;
+  bool replaced_previous_output = false;  // output_dir held an earlier run, now replaced
   double seconds = 0.0;
   std::string BriefReport() const;
 };
 
-// Throws samp::Error when the options are invalid or the model does not load;
-// failures of single sequences or tracks are in the summary.
+// Throws samp::Error when the options are invalid, the output folder may not
+// be replaced, two sequences have the same name, the model does not load or
+// the output cannot be written (output_dir then stays as it was); failures of
+// single sequences or tracks are in the summary.
 RunFitSummary RunFit(const RunFitOptions& options);
+
+// The name of a sequence's outputs (label_02/<name>.txt, meshes/<name>/):
+// the stem of its calibration file (data/sequence.h ListSequence), or the
+// folder's name when the folder cannot be listed.
+std::string SequenceOutputName(const std::string& directory);
 
 }  // namespace samp
