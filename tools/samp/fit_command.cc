@@ -102,13 +102,17 @@ void RegisterFitCommand(CLI::App* app) {
       "Fit shape (PCA SDF manifold) and trajectory of every tracked car in stereo sequences,\n"
       "with shape and motion priors (SAMP). Writes OUT/label_02/<seq>.txt (KITTI tracking\n"
       "results), OUT/meshes/track_<id>.ply (+ _points.ply), OUT/tracks.json and OUT/config.json.\n"
-      "A sequence or track that fails is reported and skipped. See docs/fitting.md.");
+      "A sequence or track that fails is reported and skipped; OUT holds this run only.\n"
+      "See docs/fitting.md.");
   command->add_option("--model", o.model_path, "Shape model file (.vdb); default: the shipped model")
       ->capture_default_str();
   command->add_option("--seq", o.sequences,
                       "Sequence directory (docs/sequence_format.md); repeat for a batch")
       ->required();
-  command->add_option("--out", o.output_dir, "Output directory (created)")->required();
+  command->add_option("--out", o.output_dir,
+                      "Output directory: written into a temporary folder beside it that replaces it as a "
+                      "whole at the end; must be new, empty or an earlier samp fit output")
+      ->required();
   command->add_option("--tracks", o.tracking_labels,
                       "KITTI tracking label file giving the tracks (frame track_id ...); repeat once "
                       "per --seq, in the same order: the way to plug in another tracker. Without it "
@@ -202,22 +206,27 @@ void RegisterFitCommand(CLI::App* app) {
         << "no --model given and this build has no default model";
     SAMP_CHECK(!(options->link_only && (visuals->pictures || visuals->html)))
         << "--link-only fits nothing: --pictures and --html need fitted shapes";
+    // Pictures and viewer go into the run's temporary output folder, so that
+    // they replace the earlier run's together with everything else.
+    std::string visuals_report;
+    if (visuals->pictures || visuals->html) {
+      options->before_commit = [visuals, &visuals_report](const std::string& folder) {
+        FitVisualsOptions v = *visuals;
+        v.output_dir = folder;
+        visuals_report = WriteFitVisuals(v).BriefReport();
+        // Name the files where they will be after the rename.
+        for (size_t at = visuals_report.find(folder); at != std::string::npos;
+             at = visuals_report.find(folder, at + visuals->output_dir.size())) {
+          visuals_report.replace(at, folder.size(), visuals->output_dir);
+        }
+      };
+      visuals->output_dir = options->output_dir;
+    }
     const RunFitSummary summary = RunFit(*options);
     std::cout << summary.BriefReport() << std::endl;
     std::cout << "wrote " << options->output_dir << std::endl;
-    if (summary.num_sequences_failed == int(summary.sequences.size())) {
-      SAMP_THROW() << "every sequence failed";
-    }
-    int num_detections = 0;
-    for (const auto& q : summary.sequences) num_detections += q.input.tracking.num_detections;
-    if (!options->link_only && summary.num_tracks_fitted == 0 && num_detections > 0) {
-      SAMP_THROW() << "no track was fitted although the input had " << num_detections
-                   << " detection(s) (see the messages above)";
-    }
-    if (visuals->pictures || visuals->html) {
-      visuals->output_dir = options->output_dir;
-      std::cout << WriteFitVisuals(*visuals).BriefReport() << std::endl;
-    }
+    if (!summary.failure.empty()) SAMP_THROW() << summary.failure;
+    if (!visuals_report.empty()) std::cout << visuals_report << std::endl;
   });
 }
 

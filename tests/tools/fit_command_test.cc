@@ -1,0 +1,225 @@
+// `samp fit` as a process on small synthetic sequences: exit status and the
+// one-line error when every track failed or two sequences share a name, and
+// SIGINT in the middle of a run (docs/reliability.md, "Text, JSON and outputs").
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "libsamp/data/kitti_io.h"
+#include "libsamp/eval/synth.h"
+#include "tests/eval/test_scene.h"
+
+namespace samp {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The scene's folder goes when the binary ends with every test passed.
+struct Scene {
+  ~Scene() {
+    if (!root.empty() && ::testing::UnitTest::GetInstance()->Passed()) {
+      std::error_code ignored;
+      fs::remove_all(root, ignored);
+    }
+  }
+  std::string root;
+  std::vector<std::string> sequences, names;
+  std::string model;
+};
+
+// Two sequences of 4 frames (clean preset) and the box model.
+const Scene& TheScene() {
+  static const Scene scene = [] {
+    Scene s;
+    s.root = test::MakeTempFolder("fit_command");
+    SynthOptions synth = test::QuickSynthOptions(s.root + "/seqs", 11, SynthScene::kClean);
+    synth.num_frames = 4;
+    synth.detector.flip_probability = 0.0;
+    for (const SynthSequenceInfo& q :
+         SynthesizeSequences(synth, {{"boxcar", test::MakeBoxCar(4.2)}}).sequences) {
+      s.sequences.push_back(q.folder);
+      s.names.push_back(q.name);
+    }
+    s.model = s.root + "/box_model.vdb";
+    test::MakeBoxModel().Save(s.model);
+    return s;
+  }();
+  return scene;
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+std::string Folder(const std::string& name) {
+  const fs::path folder = fs::path(TheScene().root) / name;
+  fs::remove_all(folder);
+  fs::create_directories(folder);
+  return folder.string();
+}
+
+// Starts `samp ARGS` with stdout and stderr into `log_prefix`.{out,err}.
+pid_t StartSamp(const std::vector<std::string>& args, const std::string& log_prefix) {
+  std::vector<std::string> all = {SAMP_BINARY};
+  all.insert(all.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (std::string& a : all) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  const std::string out = log_prefix + ".out", err = log_prefix + ".err";
+  const pid_t child = ::fork();
+  if (child == 0) {
+    const int out_fd = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int err_fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (out_fd < 0 || err_fd < 0) ::_exit(127);
+    ::dup2(out_fd, 1);
+    ::dup2(err_fd, 2);
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  return child;
+}
+
+// Runs `samp ARGS`; returns the exit status (-1 when it did not exit) and
+// its standard error.
+int RunSamp(const std::vector<std::string>& args, const std::string& log_prefix, std::string* stderr_text) {
+  const pid_t child = StartSamp(args, log_prefix);
+  if (child < 0) return -1;
+  int status = 0;
+  if (::waitpid(child, &status, 0) != child) return -1;
+  *stderr_text = ReadText(log_prefix + ".err");
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// The last non-empty line of `text`.
+std::string LastLine(const std::string& text) {
+  std::istringstream in(text);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (!line.empty()) last = line;
+  return last;
+}
+
+// Every track fails (an association radius that takes no stereo point: each
+// track is refused by the fitter; tests/pipeline
+// RunFit.UnusableSolveIsAFailedTrack makes every solve fail in Ceres instead,
+// which no command-line option can): exit status 1 with one error line, and
+// the run's record is still written.
+TEST(FitCommand, EveryTrackFailedExitsOne) {
+  const Scene& scene = TheScene();
+  const std::string runs = Folder("every_track_failed");
+  const std::string out = runs + "/out";
+  std::string err;
+  const int status = RunSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--out", out,
+                              "--association-radius", "1e-9", "-q"},
+                             runs + "/log", &err);
+  EXPECT_EQ(status, 1) << err;
+  const std::string last = LastLine(err);
+  EXPECT_EQ(last.rfind("samp: error: no track was fitted although the input had ", 0), 0u) << err;
+  EXPECT_NE(last.find("every track failed"), std::string::npos) << err;
+  EXPECT_TRUE(fs::exists(out + "/tracks.json"));
+  EXPECT_TRUE(ReadTrackingLabels(out + "/label_02/" + scene.names[0] + ".txt").empty());
+  EXPECT_FALSE(fs::exists(out + "/meshes"));
+
+  // The same with the default radius exits 0 (the failure is that option's).
+  ASSERT_EQ(RunSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--out", out, "-q"}, runs + "/log",
+                    &err),
+            0)
+      << err;
+  EXPECT_FALSE(ReadTrackingLabels(out + "/label_02/" + scene.names[0] + ".txt").empty());
+}
+
+TEST(FitCommand, SameNamedSequencesExitOneBeforeFitting) {
+  const Scene& scene = TheScene();
+  const std::string runs = Folder("same_name");
+  const std::string a = runs + "/a/" + scene.names[0], b = runs + "/b/" + scene.names[0];
+  fs::create_directories(runs + "/a");
+  fs::create_directories(runs + "/b");
+  fs::copy(scene.sequences[0], a, fs::copy_options::recursive);
+  fs::copy(scene.sequences[0], b, fs::copy_options::recursive);
+  const std::string out = runs + "/out";
+  std::string err;
+  EXPECT_EQ(RunSamp({"fit", "--model", scene.model, "--seq", a, "--seq", b, "--out", out}, runs + "/log", &err), 1)
+      << err;
+  // One line: the error, naming both paths; nothing fitted, nothing written.
+  EXPECT_EQ(err, "samp: error: sequences " + a + " and " + b + " have the same name '" + scene.names[0] +
+                     "': their outputs (label_02/" + scene.names[0] + ".txt, meshes/" + scene.names[0] +
+                     "/) would overwrite each other; fit them into separate output folders\n");
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// SIGINT while the run writes: the second sequence's --tracks file is a FIFO
+// that nobody writes, so the run blocks there after the first sequence's
+// labels and meshes are in its temporary folder. The interrupted run leaves
+// the earlier output exactly as it was and no temporary folder; the process
+// ends by the signal.
+TEST(FitCommand, InterruptedRunLeavesTheEarlierOutput) {
+  const Scene& scene = TheScene();
+  ASSERT_EQ(scene.sequences.size(), 2u);
+  const std::string runs = Folder("interrupted");
+  const std::string out = runs + "/out";
+  std::string err;
+  ASSERT_EQ(RunSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--out", out, "-q"}, runs + "/log",
+                    &err),
+            0)
+      << err;
+  const std::string tracks_before = ReadText(out + "/tracks.json");
+  const std::string labels_before = ReadText(out + "/label_02/" + scene.names[0] + ".txt");
+
+  const std::string fifo = runs + "/blocked_tracks.txt";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  const std::string true_tracks = scene.sequences[0] + "/gt/label_02/" + scene.names[0] + ".txt";
+  ASSERT_TRUE(fs::exists(true_tracks));
+  const pid_t child = StartSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--seq",
+                                 scene.sequences[1], "--tracks", true_tracks, "--tracks", fifo, "--out", out,
+                                 "--threads", "2", "-q"},
+                                runs + "/log_interrupted");
+  ASSERT_GT(child, 0);
+  // Wait until the first sequence's labels are in the temporary folder.
+  const std::string prefix = ".tmp." + std::to_string(child) + ".";
+  bool written = false;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(300);
+  while (!written && std::chrono::steady_clock::now() < deadline) {
+    for (const auto& entry : fs::directory_iterator(runs)) {
+      const std::string name = entry.path().filename().string();
+      if (name.rfind(prefix, 0) == 0 &&
+          fs::exists(entry.path() / "out/label_02" / (scene.names[0] + ".txt")) &&
+          fs::exists(entry.path() / "out/meshes" / scene.names[0])) {
+        written = true;
+      }
+    }
+    int status = 0;
+    if (!written && ::waitpid(child, &status, WNOHANG) == child) {
+      FAIL() << "samp ended before it was interrupted: " << ReadText(runs + "/log_interrupted.err");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  EXPECT_TRUE(written) << "the first sequence's outputs never appeared";
+  ASSERT_EQ(::kill(child, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGINT) << status;
+  fs::remove(fifo);
+
+  for (const auto& entry : fs::directory_iterator(runs)) {
+    EXPECT_NE(entry.path().filename().string().rfind(".tmp.", 0), 0u) << "left behind: " << entry.path();
+  }
+  EXPECT_EQ(ReadText(out + "/tracks.json"), tracks_before);
+  EXPECT_EQ(ReadText(out + "/label_02/" + scene.names[0] + ".txt"), labels_before);
+  EXPECT_FALSE(fs::exists(out + "/label_02/" + scene.names[1] + ".txt"));
+  EXPECT_FALSE(fs::exists(out + "/meshes/" + scene.names[0]));  // one sequence before: meshes/track_<id>.ply
+}
+
+}  // namespace
+}  // namespace samp
