@@ -212,6 +212,9 @@ bool FitOptions::Check() const {
   SAMP_CHECK(std::isfinite(em_box_margin) && em_box_margin >= 0.0)
       << "FitOptions.em_box_margin must be >= 0";
   SAMP_CHECK(min_points_per_frame >= 1) << "FitOptions.min_points_per_frame must be >= 1";
+  SAMP_CHECK(max_solve_points_per_frame == 0 || max_solve_points_per_frame >= min_points_per_frame)
+      << "FitOptions.max_solve_points_per_frame must be 0 (all) or >= min_points_per_frame ("
+      << min_points_per_frame << "), got " << max_solve_points_per_frame;
   SAMP_CHECK(positive(huber_threshold)) << "FitOptions.huber_threshold must be > 0";
   SAMP_CHECK(positive(correlation_area_px)) << "FitOptions.correlation_area_px must be > 0";
   SAMP_CHECK(positive(silhouette_sigma_px)) << "FitOptions.silhouette_sigma_px must be > 0";
@@ -438,6 +441,26 @@ double EffectivePoints(const TrackFrame& f, int n, const FitOptions& options) {
   return std::min(double(n), n * f.candidate_pixels_per_point / options.correlation_area_px);
 }
 
+// The points of a frame's association that enter a solve: all of them, or
+// `max_points` spread evenly over the association's order (k = floor((j +
+// 1/2) n / max_points)); deterministic.
+void SolveSubsample(const Association& a, int max_points, std::vector<Eigen::Vector3d>* points,
+                    std::vector<double>* sigmas) {
+  const size_t n = a.points.size();
+  if (max_points <= 0 || n <= size_t(max_points)) {
+    *points = a.points;
+    *sigmas = a.sigmas;
+    return;
+  }
+  points->resize(size_t(max_points));
+  sigmas->resize(size_t(max_points));
+  for (size_t j = 0; j < size_t(max_points); ++j) {
+    const size_t k = std::min(n - 1, size_t((double(j) + 0.5) * double(n) / double(max_points)));
+    (*points)[j] = a.points[k];
+    (*sigmas)[j] = a.sigmas[k];
+  }
+}
+
 SolveReport Solve(const ShapeLookup& lookup, const Track& track,
                   const std::vector<Association>& data, double sigma_scale,
                   const FitOptions& options, FitState* state) {
@@ -465,16 +488,18 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
     double* pose = state->poses[k].data();
     problem.AddParameterBlock(pose, 4);
     if (int(data[k].points.size()) >= options.min_points_per_frame) {
-      std::vector<double> sigmas = data[k].sigmas;
-      for (double& s : sigmas) s *= sigma_scale;
-      const double data_weight =
-          mean ? frame_weight : EffectivePoints(f, int(data[k].points.size()), options);
+      const int n = int(data[k].points.size());
+      const double data_weight = mean ? frame_weight : EffectivePoints(f, n, options);
       const SdfCostOptions cost_options = DataTermOptions(track, f, options, data_weight);
+      std::vector<Eigen::Vector3d> points;
+      std::vector<double> sigmas;
+      SolveSubsample(data[k], options.max_solve_points_per_frame, &points, &sigmas);
+      for (double& s : sigmas) s *= sigma_scale;
       ceres::CostFunction* cost =
-          options.compress_data_blocks ? CompressedSdfCost::Create(&lookup, data[k].points, sigmas, cost_options)
-                                       : SdfCost::Create(&lookup, data[k].points, sigmas, cost_options);
+          options.compress_data_blocks ? CompressedSdfCost::Create(&lookup, points, sigmas, cost_options)
+                                       : SdfCost::Create(&lookup, points, sigmas, cost_options);
       problem.AddResidualBlock(cost, nullptr, z, pose);
-      report.num_points += int(data[k].points.size());
+      report.num_points += int(points.size());
     }
     problem.AddResidualBlock(GroundCost::Create(f.ground_plane_in_world, options.sigma_ground, frame_weight),
                              nullptr, pose);
@@ -653,10 +678,14 @@ TrackFit TrackFitter::Fit(const Track& track) const {
       out.yaw_rate = state.velocities[k][1];
     }
     if (out.num_points > 0) {
-      // The data term as optimised (weight 1: the mean of rho over the points).
+      // The data term as optimised (weight 1: the mean of rho over the
+      // points of the last solve, the subsample when the frame was capped).
       out.effective_points = EffectivePoints(f, out.num_points, options_);
-      const SdfCost cost(&lookup_, data[k].points, data[k].sigmas, DataTermOptions(track, f, options_, 1.0));
-      std::vector<double> residuals(data[k].points.size());
+      std::vector<Eigen::Vector3d> points;
+      std::vector<double> sigmas;
+      SolveSubsample(data[k], options_.max_solve_points_per_frame, &points, &sigmas);
+      const SdfCost cost(&lookup_, points, sigmas, DataTermOptions(track, f, options_, 1.0));
+      std::vector<double> residuals(points.size());
       cost.EvaluateRows(z.data(), state.poses[k].data(), 0, cost.num_residuals(), residuals.data(), nullptr, 0,
                         nullptr, 0);
       double sum = 0.0;

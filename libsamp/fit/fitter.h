@@ -39,6 +39,16 @@ struct FitOptions {
   double em_box_margin = 0.3;
   // Frames with fewer associated points get no data term (motion carries them).
   int min_points_per_frame = 10;
+  // At most this many of a frame's associated points enter a solve (an even,
+  // deterministic subsample; 0 = all). The data weight stays that of all the
+  // associated points (kEffective: N_eff of the whole association; kMean: a
+  // mean), so the cap changes the cost's sampling, not the prior/data
+  // balance. Stereo errors are correlated over ~correlation_area_px pixels, so
+  // beyond a few points per correlation area more points add time, not
+  // information: 250 is about N_eff of a near car's frame (5,000 candidates
+  // of 4 pixels each / 80 px); measured on the street benchmark's first seed
+  // in docs/fitting.md ("Points per solve").
+  int max_solve_points_per_frame = 250;
   // Data blocks compressed to R + 5 residuals with the same cost, gradient and
   // Gauss-Newton matrix (CompressedSdfCost; much faster); false = N residuals.
   bool compress_data_blocks = true;

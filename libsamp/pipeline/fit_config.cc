@@ -72,6 +72,7 @@ void OptionFields(OptionsJson& io, FitOptions& o) {
   io("em_distance_threshold", o.em_distance_threshold);
   io("em_box_margin", o.em_box_margin);
   io("min_points_per_frame", o.min_points_per_frame);
+  io("max_solve_points_per_frame", o.max_solve_points_per_frame);
   io("compress_data_blocks", o.compress_data_blocks);
   io.Named("data_term", o.data_term, DataTermName, ParseDataTerm);
   io.Named("data_weighting", o.data_weighting, DataWeightingName, ParseDataWeighting);

@@ -4,9 +4,13 @@
 //                             blocks compressed to R + 5 rows, the default)
 //   BM_Fit/em:1/compressed:1  with the hard-EM pass (re-association + second solve)
 //   BM_Fit/.../compressed:0   the per-frame blocks with N rows
-//   BM_Fit/.../term:N         data term: 0 = paper (with the paper's mean
-//                             weighting), 1 = ray-depth (likewise), 2 = disparity
-//                             (the default, effective weighting)
+//   BM_Fit/.../term:N         data term: 0 = the paper's energy (--data-term
+//                             paper --weighting mean --huber-loss), 1 = the
+//                             default (ray depth, mixture, effective weighting),
+//                             2 = the disparity term (effective weighting)
+//   BM_Fit/.../cap:N          FitOptions::max_solve_points_per_frame = N
+//                             (0 = all 5,000 points of a frame in every solve;
+//                             250 = the default)
 //   BM_FitLinearSolver/<solver>  the single solve with other linear solvers
 //   BM_FitAutodiffPerPoint       the same single solve with one autodiff
 //                                cost block per point (for comparison)
@@ -78,6 +82,7 @@ void BM_Fit(benchmark::State& state) {
   options.compress_data_blocks = state.range(1) != 0;
   const DataTerm terms[] = {DataTerm::kPaper, DataTerm::kRayDepth, DataTerm::kDisparity};
   options.data_term = terms[state.range(2)];
+  options.max_solve_points_per_frame = int(state.range(3));
   // term 0 = the paper's energy (mean weighting, Huber); 1 = the default
   // (ray depth, effective weighting, mixture); 2 = the disparity term (effective).
   if (options.data_term == DataTerm::kPaper) {
@@ -87,21 +92,28 @@ void BM_Fit(benchmark::State& state) {
   RunFit(state, options);
 }
 BENCHMARK(BM_Fit)
-    ->ArgNames({"em", "compressed", "term"})
-    ->Args({0, 1, 2})
-    ->Args({1, 1, 2})
-    ->Args({0, 1, 0})
-    ->Args({1, 1, 0})
-    ->Args({0, 0, 0})
-    ->Args({1, 0, 0})
-    ->Args({0, 1, 1})
-    ->Args({1, 1, 1})
+    ->ArgNames({"em", "compressed", "term", "cap"})
+    ->Args({0, 1, 1, 250})
+    ->Args({1, 1, 1, 250})
+    ->Args({0, 1, 0, 250})
+    ->Args({1, 1, 0, 250})
+    ->Args({1, 1, 1, 500})
+    ->Args({1, 1, 1, 1000})
+    ->Args({0, 1, 1, 0})
+    ->Args({1, 1, 1, 0})
+    ->Args({0, 1, 0, 0})
+    ->Args({1, 1, 0, 0})
+    ->Args({0, 0, 0, 0})
+    ->Args({1, 0, 0, 0})
+    ->Args({0, 1, 2, 0})
+    ->Args({1, 1, 2, 0})
     ->Unit(benchmark::kMillisecond);
 
 void BM_FitLinearSolver(benchmark::State& state) {
   FitOptions options;
   options.em_iterations = 0;
   options.data_term = DataTerm::kPaper;  // comparable with the earlier figures
+  options.max_solve_points_per_frame = 0;
   options.data_weighting = DataWeighting::kMean;
   options.mixture_loss = false;
   const char* solvers[] = {"sparse_normal_cholesky", "dense_schur", "iterative_schur", "dense_qr"};

@@ -179,6 +179,42 @@ TEST(Fitter, RecoversShapeAndArcTrajectory) {
   }
 }
 
+// FitOptions::max_solve_points_per_frame: a solve uses an even subsample of
+// each frame's association, weighted as the whole association, so the prior
+// and data keep their balance and the fit moves little.
+TEST(Fitter, SolvePointCapSubsamplesWithTheWholeAssociationsWeight) {
+  FitOptions all;
+  all.max_solve_points_per_frame = 0;
+  FitOptions capped = all;
+  capped.max_solve_points_per_frame = 100;
+  const Synthetic s = MakeTrack(TrackFitter(Model(), all).lookup(), 11, 8.0, 0.3, 800, 17);
+  const TrackFit fit_all = TrackFitter(Model(), all).Fit(s.track);
+  const TrackFit fit_capped = TrackFitter(Model(), capped).Fit(s.track);
+  ASSERT_TRUE(fit_all.summary.usable && fit_capped.summary.usable);
+  ASSERT_EQ(fit_all.summary.solves.size(), fit_capped.summary.solves.size());
+  for (size_t k = 0; k < fit_all.summary.solves.size(); ++k) {
+    EXPECT_GT(fit_all.summary.solves[k].num_points, 11 * 500) << "solve " << k;
+    EXPECT_EQ(fit_capped.summary.solves[k].num_points, 11 * 100) << "solve " << k;
+  }
+  // The data weight is that of the whole association: the cost is an
+  // estimate of the same energy (weighted by the 100 points, it would be ~8x smaller).
+  EXPECT_NEAR(fit_capped.summary.final_cost / fit_all.summary.final_cost, 1.0, 0.3);
+  ASSERT_EQ(fit_all.frames.size(), fit_capped.frames.size());
+  for (size_t k = 0; k < fit_all.frames.size(); ++k) {
+    const FrameFit& a = fit_all.frames[k];
+    const FrameFit& c = fit_capped.frames[k];
+    // The association (and with it N_eff, the data weight) is that of all points.
+    EXPECT_GT(c.num_points, 500) << "frame " << k;
+    EXPECT_NEAR(c.effective_points, a.effective_points, 0.1 * a.effective_points) << "frame " << k;
+    EXPECT_LT((c.position - a.position).norm(), 0.05) << "frame " << k;
+    EXPECT_LT((c.position - s.poses_true[k].head<3>()).norm(), 0.10) << "frame " << k;
+  }
+  EXPECT_LT(ShapeError(TrackFitter(Model(), all).lookup(), fit_all.shape_code, fit_capped.shape_code), 0.02);
+  FitOptions bad = all;
+  bad.max_solve_points_per_frame = bad.min_points_per_frame - 1;
+  EXPECT_THROW(bad.Check(), Error);
+}
+
 TEST(Fitter, StandingCarAndSingleFrameMode) {
   FitOptions options;
   Synthetic s;

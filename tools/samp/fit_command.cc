@@ -151,6 +151,11 @@ void RegisterFitCommand(CLI::App* app) {
                       "independent observations) or mean (the paper's (1/T) sum_t mean over points)")
       ->capture_default_str()
       ->check(CLI::IsMember({"effective", "mean"}));
+  command->add_option("--max-solve-points", o.fit.max_solve_points_per_frame,
+                      "At most this many of a frame's associated points enter each solve (an even subsample; "
+                      "the data weight stays that of all of them); 0 = all")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   command->add_option("--correlation-area", o.fit.correlation_area_px,
                       "Image area over which stereo errors are correlated (effective weighting), px")
       ->capture_default_str()
