@@ -3,10 +3,11 @@
 #   1. install missing Debian packages and build samp,
 #   2. fetch the real CAD cars from Debian (torcs-data, trigger-rally-data) into a cache,
 #   3. inspect the shipped model (models/samp_cars_r5.vdb): summary, eigen-shape meshes and pictures,
-#   4. leave-out run: train a model without the evaluation cars, synthesize stereo sequences
-#      of the held-out cars, fit them (full method with the paper's data term and with the
-#      ray-distance data term, and single-frame), evaluate against the ground truth (tables
-#      and plots).
+#   4. leave-out run (tools/run_benchmark.sh, one seed): train a model without the evaluation
+#      cars, synthesize street stereo sequences of the held-out cars, fit them (the full method
+#      with samp's defaults, the paper's energy, and single-frame), evaluate against the ground
+#      truth (tables and plots),
+#   5. pictures and an offline viewer page of every fit.
 # Usage: tools/demo.sh [OUT_DIR]   (default: $SAMP_DATA_DIR/demo or ~/.cache/samp/demo;
 #        it must lie outside the repository). Set DEMO_SEQUENCES (default 2) for a larger run.
 set -euo pipefail
@@ -29,31 +30,33 @@ echo "== The shipped model"
 
 echo "== Leave-out fit and evaluation on synthetic stereo"
 bash "$root/tools/run_benchmark.sh" --samp "$samp" --cad "$data/cad/cars" --work "$out/benchmark" \
-  --sequences "${DEMO_SEQUENCES:-2}" --cars-per-sequence 2
+  --sequences "${DEMO_SEQUENCES:-2}" --cars-per-sequence 2 --seeds 2017
+run="$out/benchmark/seed_2017"
+fits=(fit_full fit_full_paper fit_single)
 
 echo "== Pictures and viewers of the fits"
-for fit in fit_full fit_full_ray fit_single; do
-  "$samp" view "$out/benchmark/$fit" --pictures -q
+for fit in "${fits[@]}"; do
+  "$samp" view "$run/$fit" --pictures -q
 done
 
 echo
 echo "samp demo: outputs in $out"
 echo "  model_summary.txt, eigen_shapes/*.ply, pictures/*.png"
-echo "  benchmark/sequences (synthetic stereo + ground truth), benchmark/fit_full, benchmark/fit_full_ray,"
-echo "  benchmark/fit_single"
-echo "  benchmark/eval/results.md and *.png (accuracy/completeness/F1 vs tau, pose error vs distance)"
-echo "  benchmark/eval/error_surfaces/<method>/<seq>/track_<id>_error.png (surfaces coloured by error at tau)"
+echo "  benchmark/model_holdout.vdb (the leave-out model), benchmark/seed_2017/sequences (synthetic stereo +"
+echo "  ground truth), benchmark/seed_2017/fit_full (defaults), fit_full_paper (the paper's energy), fit_single"
+echo "  benchmark/seed_2017/eval/results.md and *.png (accuracy/completeness/F1 vs tau, pose error vs distance)"
+echo "  benchmark/seed_2017/eval/error_surfaces/<method>/<seq>/track_<id>_error.png (surfaces coloured by error at tau)"
 echo
 echo "Pictures of the fits (docs/fitting.md, \"Pictures\"):"
-for fit in fit_full fit_full_ray fit_single; do
-  for sheet in "$out/benchmark/$fit"/pictures/*/birdseye.png; do
+for fit in "${fits[@]}"; do
+  for sheet in "$run/$fit"/pictures/*/birdseye.png; do
     [ -e "$sheet" ] || continue
     folder="$(dirname "$sheet")"
     echo "  $folder/: birdseye.png, $(cd "$folder" && ls track_*.png | wc -l) track pictures (track_<id>_{overlay,birdseye,shape,error}.png)"
   done
 done
 echo "Interactive viewers (open in a browser; they work offline):"
-for fit in fit_full fit_full_ray fit_single; do
-  echo "  $out/benchmark/$fit/index.html"
+for fit in "${fits[@]}"; do
+  echo "  $run/$fit/index.html"
 done
 echo "  $out/pictures/inspect.html (eigen-shape sliders of the shipped model)"
