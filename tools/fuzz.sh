@@ -2,9 +2,10 @@
 # Builds samp's libFuzzer targets (tests/fuzz: clang, ASan + UBSan, libFuzzer)
 # and runs each for a given time. Needs Debian's clang (installed if missing).
 #
-#   bash tools/fuzz.sh [--seconds N] [--work DIR] [TARGET ...]
+#   bash tools/fuzz.sh [--seconds N] [--runs N] [--work DIR] [TARGET ...]
 #
 #   --seconds N   run time per target (default 60)
+#   --runs N      also stop a target after N executions (libFuzzer -runs)
 #   --work DIR    working folder: corpus copies, findings, logs
 #                 (default ${SAMP_DATA_DIR:-~/.cache/samp}/fuzz)
 #   TARGET        model_loader kitti_text mesh manifest (default: all)
@@ -20,26 +21,30 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 seconds=60
+runs_limit=""
 work="${SAMP_DATA_DIR:-$HOME/.cache/samp}/fuzz"
 targets=()
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds="$2"; shift 2 ;;
+    --runs) runs_limit="$2"; shift 2 ;;
     --work) work="$2"; shift 2 ;;
-    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,20p' "$0"; exit 0 ;;
     -*) echo "fuzz.sh: unknown option $1" >&2; exit 2 ;;
     *) targets+=("$1"); shift ;;
   esac
 done
 [ ${#targets[@]} -gt 0 ] || targets=(model_loader kitti_text mesh manifest)
 case "$seconds" in ''|*[!0-9]*) echo "fuzz.sh: --seconds needs a whole number" >&2; exit 2 ;; esac
+case "$runs_limit" in *[!0-9]*) echo "fuzz.sh: --runs needs a whole number" >&2; exit 2 ;; esac
 
 build="${SAMP_SANITIZE_BUILD_DIR:-$root/build-sanitize}"
 bash "$root/tools/sanitize_tests.sh" --configure-only >/dev/null
 cmake --build "$build" -j "$(nproc)" --target "${targets[@]/#/fuzz_}"
 
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=0}"
-export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$root/tests/sanitizer/lsan.supp}"
+export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1:suppressions=$root/tests/sanitizer/ubsan.supp}"
 status=0
 for target in "${targets[@]}"; do
   dir="$work/$target"
@@ -49,13 +54,13 @@ for target in "${targets[@]}"; do
   set +e
   "$build/tests/fuzz/fuzz_$target" "$dir/corpus" -max_total_time="$seconds" -rss_limit_mb=1024 \
     -malloc_limit_mb=1024 -max_len=2097152 -timeout=10 -print_final_stats=1 \
-    -artifact_prefix="$dir/findings/" > "$log" 2>&1
+    ${runs_limit:+-runs=$runs_limit} -artifact_prefix="$dir/findings/" > "$log" 2>&1
   rc=$?
   set -e
   runs=$(grep -o '^stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo 0)
   rss=$(grep -o '^stat::peak_rss_mb: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo '?')
   findings=$(find "$dir/findings" -type f | wc -l)
-  echo "fuzz $target: $runs executions in ${seconds} s, peak RSS $rss MB, $findings findings (exit $rc, log $log)"
+  echo "fuzz $target: $runs executions (limit ${seconds} s${runs_limit:+ or $runs_limit runs}), peak RSS $rss MB, $findings findings (exit $rc, log $log)"
   if [ "$rc" -ne 0 ] || [ "$findings" -ne 0 ]; then status=1; fi
 done
 exit $status

@@ -5,7 +5,8 @@
 # $SAMP_SANITIZE_BUILD_DIR), without the benchmarks, and runs ctest. Any
 # sanitizer report fails the test that produced it (halt_on_error; a leak
 # fails at exit). tools/fuzz.sh fuzzes with the same build. Third-party leaks
-# that are not samp's are listed with their reason in tests/sanitizer/lsan.supp.
+# that are not samp's are listed with their reason in tests/sanitizer/lsan.supp,
+# undefined behaviour inside third-party headers in tests/sanitizer/ubsan.supp.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${SAMP_SANITIZE_BUILD_DIR:-$root/build-sanitize}"
@@ -19,7 +20,7 @@ cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=cla
 if [ "${1:-}" = "--configure-only" ]; then exit 0; fi
 cmake --build "$build" -j "$(nproc)" ${SAMP_SANITIZE_TARGETS:+--target $SAMP_SANITIZE_TARGETS}
 export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:${ASAN_OPTIONS:-}"
-export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:${UBSAN_OPTIONS:-}"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1:suppressions=$root/tests/sanitizer/ubsan.supp:${UBSAN_OPTIONS:-}"
 export LSAN_OPTIONS="suppressions=$root/tests/sanitizer/lsan.supp:${LSAN_OPTIONS:-}"
 cd "$build"
 ctest --output-on-failure -j "$(nproc)" ${SAMP_SANITIZE_CTEST_ARGS:-}

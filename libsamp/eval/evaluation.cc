@@ -750,8 +750,11 @@ EvalSummary Evaluate(const EvalOptions& options) {
   std::vector<std::string> names;
   for (const std::string& sequence : options.sequences) names.push_back(ListSequence(sequence).name);
   for (const auto& [name, folder] : options.results) {
-    const bool any = std::any_of(names.begin(), names.end(),
-                                 [&](const std::string& seq) { return !ResultFolder(folder, seq).empty(); });
+    // A lambda may not capture a structured binding in C++17 (clang refuses it).
+    const std::string& result_folder = folder;
+    const bool any = std::any_of(names.begin(), names.end(), [&](const std::string& seq) {
+      return !ResultFolder(result_folder, seq).empty();
+    });
     SAMP_CHECK(any) << "eval: result folder " << folder << " (" << name << ") has no results for any of the "
                     << names.size() << " sequence(s): no label_02/<seq>.txt or <seq>/label_02/<seq>.txt for "
                     << names.front() << (names.size() > 1 ? ", ..." : "");

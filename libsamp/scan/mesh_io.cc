@@ -7,12 +7,14 @@
 #include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <cctype>
+#include <cstdint>
 #include <deque>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <system_error>
+#include <vector>
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
@@ -28,6 +30,50 @@ std::string LowerExtension(const std::string& path) {
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return char(std::tolower(c)); });
   return extension;
+}
+
+// assimp's OFF reader allocates the vertex and face counts of the header
+// before it reads a single vertex (a header "OFF\n99999999999999 4 6" asked
+// for 49 GB under the fuzzer). Every vertex takes at least 6 bytes ("0 0 0\n")
+// and every face at least 8 ("3 0 1 2\n"), so counts the file cannot hold are
+// refused here, naming the file and the figures. A header samp cannot parse
+// is left to assimp, which refuses it.
+void CheckOffHeaderFitsTheFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string text(4096, '\0');
+  in.read(&text[0], std::streamsize(text.size()));
+  text.resize(size_t(in.gcount()));
+  std::vector<std::string> tokens;
+  for (size_t i = 0; i < text.size() && tokens.size() < 3;) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c == '#') {
+      while (i < text.size() && text[i] != '\n') ++i;
+    } else if (std::isspace(c)) {
+      ++i;
+    } else {
+      size_t end = i;
+      while (end < text.size() && !std::isspace(static_cast<unsigned char>(text[end])) && text[end] != '#') ++end;
+      tokens.push_back(text.substr(i, end - i));
+      i = end;
+    }
+  }
+  if (tokens.size() < 3) return;
+  const std::string& keyword = tokens[0];
+  if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
+  uint64_t counts[2];
+  for (int k = 0; k < 2; ++k) {
+    const std::string& digits = tokens[size_t(k) + 1];
+    if (digits.empty() || !std::all_of(digits.begin(), digits.end(), [](char d) { return d >= '0' && d <= '9'; })) return;
+    // More than 15 digits is beyond any file; saturate instead of overflowing.
+    counts[k] = digits.size() > 15 ? uint64_t(1) << 60 : std::stoull(digits);
+  }
+  std::error_code ec;
+  const uint64_t file_bytes = fs::file_size(path, ec);
+  if (ec) return;
+  const uint64_t needed = 6 * counts[0] + 8 * counts[1];
+  SAMP_CHECK(needed <= file_bytes) << "cannot read mesh '" << path << "': its OFF header announces "
+                                   << tokens[1] << " vertices and " << tokens[2] << " faces, at least "
+                                   << needed << " bytes, but the file has " << file_bytes;
 }
 
 // Appends the triangles of every mesh referenced by `node` and its children,
@@ -121,6 +167,7 @@ Mesh LoadMesh(const std::string& path) {
   std::error_code ec;
   SAMP_CHECK(fs::is_regular_file(path, ec)) << "cannot read mesh '" << path << "': no such file";
   if (LowerExtension(path) == ".json") return ReadApolloCarJson(path);
+  if (LowerExtension(path) == ".off") CheckOffHeaderFitsTheFile(path);
   Assimp::Importer importer;
   // Drop lines and points entirely; keep only triangles after triangulation.
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);

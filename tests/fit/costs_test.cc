@@ -108,7 +108,7 @@ TEST(SdfCost, ResidualAndJacobians) {
     std::vector<Eigen::Vector3d> points;
     std::vector<double> sigmas;
     for (const auto& p : surface) {
-      const Eigen::Vector3d noise(n(rng), n(rng), n(rng));
+      const Eigen::Vector3d noise = testing::DrawVector(n, rng);
       points.push_back(world_from_object * (p + c.offset * noise));
       sigmas.push_back(0.1 + 0.05 * std::abs(n(rng)));
     }
@@ -176,7 +176,9 @@ TEST(SdfCost, RayDistanceResidualsAndJacobians) {
       // Noise along the viewing ray, as stereo; a few points off to the side.
       const Eigen::Vector3d w = world_from_object * p;
       const Eigen::Vector3d ray = (w - camera).normalized();
-      points.push_back(w + 0.4 * n(rng) * ray + 0.05 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
+      const Eigen::Vector3d jitter = testing::DrawVector(n, rng);  // drawn first, as GCC did
+      const double along = n(rng);
+      points.push_back(w + 0.4 * along * ray + 0.05 * jitter);
       sigmas.push_back(0.1 + 0.05 * std::abs(n(rng)));
     }
     SdfCostOptions options;
@@ -313,11 +315,15 @@ TEST(SdfCost, DisparityResidualsAndJacobians) {
       // Stereo-like noise along the ray; some clutter beside the car.
       const Eigen::Vector3d w = world_from_object * p;
       const Eigen::Vector3d ray = (w - camera).normalized();
-      points.push_back(w + 0.5 * n(rng) * ray + 0.1 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
+      const Eigen::Vector3d jitter = testing::DrawVector(n, rng);  // drawn first, as GCC did
+      const double along = n(rng);
+      points.push_back(w + 0.5 * along * ray + 0.1 * jitter);
       sigmas.push_back(0.2 + 0.05 * std::abs(n(rng)));
     }
     for (int i = 0; i < 30; ++i) {
-      points.push_back(world_from_object * Eigen::Vector3d(3.0 * n(rng), -0.8 + 0.6 * n(rng), 2.5 * n(rng)));
+      const Eigen::Vector3d clutter = testing::DrawVector(n, rng);
+      points.push_back(world_from_object *
+                       Eigen::Vector3d(3.0 * clutter.x(), -0.8 + 0.6 * clutter.y(), 2.5 * clutter.z()));
       sigmas.push_back(0.3);
     }
     SdfCostOptions options;
@@ -488,7 +494,7 @@ TEST(CompressedSdfCost, SameCostGradientAndGaussNewtonMatrix) {
     std::vector<Eigen::Vector3d> points;
     std::vector<double> sigmas;
     for (const auto& p : surface) {
-      points.push_back(world_from_object * (p + offset * Eigen::Vector3d(n(rng), n(rng), n(rng))));
+      points.push_back(world_from_object * (p + offset * testing::DrawVector(n, rng)));
       sigmas.push_back(0.1);
     }
     SdfCost full(&lookup, points, sigmas, options);
@@ -533,7 +539,7 @@ TEST(CompressedSdfCost, CachedLinearisationFollowsTheParameters) {
   const auto surface = testing::SampleSurface(lookup, 0.5 * lookup.sigmas(), 200, &rng);
   const Eigen::Isometry3d world_from_object = WorldFromObject(Eigen::Vector3d(3, 1.6, 12), 0.3);
   std::vector<Eigen::Vector3d> points;
-  for (const auto& p : surface) points.push_back(world_from_object * (p + 0.05 * Eigen::Vector3d(n(rng), n(rng), n(rng))));
+  for (const auto& p : surface) points.push_back(world_from_object * (p + 0.05 * testing::DrawVector(n, rng)));
   const std::vector<double> sigmas(points.size(), 0.1);
   using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   struct Result {

@@ -17,6 +17,20 @@
 
 namespace samp::testing {
 
+// Three draws of `draw` in the order z, y, x, returned as (x, y, z). C++
+// leaves the evaluation order of a call's arguments (and of an operator's
+// operands) unspecified: Eigen::Vector3d(n(rng), n(rng), n(rng)) drew z first
+// under GCC and x first under clang, so the tests' random data differed by
+// compiler and three tests tuned on GCC's data failed under clang. The tests
+// now draw in GCC's former order, spelled out, so their data stays as it was.
+template <typename Draw, typename Rng>
+Eigen::Vector3d DrawVector(Draw& draw, Rng& rng) {
+  const double z = draw(rng);
+  const double y = draw(rng);
+  const double x = draw(rng);
+  return Eigen::Vector3d(x, y, z);
+}
+
 // Signed distance to a box of half extents b centred at c, corners rounded by r.
 inline double RoundBoxSdf(const Eigen::Vector3d& p, const Eigen::Vector3d& c,
                           const Eigen::Vector3d& b, double r) {
@@ -90,7 +104,8 @@ inline std::vector<Eigen::Vector3d> SampleSurface(const ShapeLookup& lookup,
   int attempts = 0;
   while (int(out.size()) < count && attempts < 100 * count) {
     ++attempts;
-    Eigen::Vector3d p(ux(*rng), uy(*rng), uz(*rng));
+    const double pz = uz(*rng), py = uy(*rng), px = ux(*rng);  // GCC's former order (DrawVector)
+    Eigen::Vector3d p(px, py, pz);
     Eigen::Vector3d grad;
     double phi = 1.0;
     for (int it = 0; it < 20; ++it) {
@@ -175,7 +190,9 @@ inline Synthetic MakeTrack(const ShapeLookup& lookup, int num_frames, double spe
     f.ground_plane_in_world = Eigen::Vector4d(0, -1, 0, 1.65);
     const Eigen::Isometry3d world_from_object = WorldFromObject(pose.head<3>(), pose[3]);
     // Detection: noisy bottom centre and yaw (camera = world here).
-    f.detection.position = pose.head<3>() + Eigen::Vector3d(0.1 * n(rng), 0.05 * n(rng), 0.1 * n(rng));
+    const Eigen::Vector3d detection_noise = DrawVector(n, rng);
+    f.detection.position = pose.head<3>() + Eigen::Vector3d(0.1 * detection_noise.x(), 0.05 * detection_noise.y(),
+                                                            0.1 * detection_noise.z());
     f.detection.rotation_y = WrapAngle(pose[3] + 0.05 * n(rng) + (k == flipped_frame ? M_PI : 0.0));
     f.detection.height = 1.5;
     f.detection.width = 1.7;
@@ -186,12 +203,13 @@ inline Synthetic MakeTrack(const ShapeLookup& lookup, int num_frames, double spe
     const auto surface = testing::SampleSurface(lookup, s.z_true, points_per_frame, &rng, view);
     for (const auto& p : surface) {
       const Eigen::Vector3d w = world_from_object * p;
-      f.candidate_points_in_world.push_back(w + 0.03 * Eigen::Vector3d(n(rng), n(rng), n(rng)));
+      f.candidate_points_in_world.push_back(w + 0.03 * DrawVector(n, rng));
       f.candidate_sigmas.push_back(0.05);
     }
     for (int i = 0; i < points_per_frame / 20; ++i) {
-      f.candidate_points_in_world.push_back(pose.head<3>() +
-                                            Eigen::Vector3d(2.0 * n(rng), -0.7 + 0.5 * n(rng), 2.0 * n(rng)));
+      const Eigen::Vector3d clutter = DrawVector(n, rng);
+      f.candidate_points_in_world.push_back(
+          pose.head<3>() + Eigen::Vector3d(2.0 * clutter.x(), -0.7 + 0.5 * clutter.y(), 2.0 * clutter.z()));
       f.candidate_sigmas.push_back(0.05);
     }
     s.track.frames.push_back(f);

@@ -3,7 +3,10 @@
 # symbol the linker could pick for the rest of the program (an inline function
 # or template instantiated there is a weak symbol; if the linker keeps that
 # copy, baseline code runs AVX instructions — the ODR trap that crashed the
-# PCA once). Every global symbol they define must be their MicroKernel accessor.
+# PCA once). Every global symbol they define must be their MicroKernel accessor,
+# except type information of function types (_ZTIF..., _ZTSF...: read-only
+# data, no instructions) that UBSan's -fsanitize=function emits for the
+# function pointers the kernels use.
 # Arguments: -DNM=<nm> -DOBJECTS=<;-list of samp_model's object files>.
 set(checked 0)
 foreach(object IN LISTS OBJECTS)
@@ -23,7 +26,8 @@ foreach(object IN LISTS OBJECTS)
     if(line MATCHES "^[0-9a-fA-F]* ([A-Zuvw]) (.*)$")
       set(type "${CMAKE_MATCH_1}")
       set(name "${CMAKE_MATCH_2}")
-      if(NOT name MATCHES "^_ZN4samp13gram_internal[0-9]+[A-Za-z0-9]*MicroKernelEv$")
+      if(NOT name MATCHES "^_ZN4samp13gram_internal[0-9]+[A-Za-z0-9]*MicroKernelEv$" AND
+         NOT (type MATCHES "^[VR]$" AND name MATCHES "^_ZT[IS]F"))
         message(FATAL_ERROR "${object} defines the global symbol '${name}' (type ${type}); "
                             "the AVX kernels must keep everything but their accessor "
                             "internal")
