@@ -161,7 +161,7 @@ struct FrameFit {
   std::string motion_model = "none";
   int num_points = 0;                                   // associated in the last solve
   double effective_points = 0.0;                        // N_eff of the last solve (kEffective), else num_points
-  double data_cost = 0.0;                               // (1/N) sum rho(s_i) at the solution
+  double data_cost = 0.0;                               // (1/N) sum rho(s_i) at the solution, over the last solve's points (the capped subsample)
   std::vector<Eigen::Vector3d> points_in_world;         // when options.keep_points
   Eigen::VectorXd shape_code;                           // single-frame mode only
   Eigen::Isometry3d WorldFromObject() const;
