@@ -165,7 +165,7 @@ def main():
                "**detections** = the noisy input detections (pose only); **single-frame** = "
                "`samp fit --single-frame` (defaults otherwise); **full** = `samp fit` with its defaults (joint shape "
                "and motion priors; ray-depth data term, mixture robustifier, effective-observation weighting: "
-               "docs/fitting.md); **full-paper** = `samp fit --data-term paper --weighting mean --huber-loss` "
+               "docs/fitting.md); **full-paper** = `samp fit --data-term paper --weighting mean --huber-loss --detection-size-sigma 0` "
                "(the paper's energy). Tracks: samp's tracker on the noisy detections (docs/sequence_format.md). "
                "Metrics: docs/evaluation.md.")
     per_run_time = {r: sum(v for k, v in timings.items() if k.startswith(r + "/")) for r in runs}

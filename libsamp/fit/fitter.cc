@@ -11,6 +11,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/util.h"
+#include "libsamp/fit/detection_size_cost.h"
 #include "libsamp/fit/ground_cost.h"
 #include "libsamp/fit/motion_cost.h"
 #include "libsamp/fit/sdf_cost.h"
@@ -222,6 +223,10 @@ bool FitOptions::Check() const {
   SAMP_CHECK(positive(sigma_ground)) << "FitOptions.sigma_ground must be > 0";
   SAMP_CHECK(std::isfinite(shape_prior_weight) && shape_prior_weight >= 0.0)
       << "FitOptions.shape_prior_weight must be >= 0";
+  SAMP_CHECK(std::isfinite(detection_size_sigma) && detection_size_sigma >= 0.0)
+      << "FitOptions.detection_size_sigma must be >= 0 (0 = off)";
+  SAMP_CHECK(std::isfinite(detection_correlation_frames) && detection_correlation_frames >= 0.0)
+      << "FitOptions.detection_correlation_frames must be >= 0";
   SAMP_CHECK(std::isfinite(standing_speed) && standing_speed >= 0.0)
       << "FitOptions.standing_speed must be >= 0";
   SAMP_CHECK(max_motion_off_axis > 0.0 && max_motion_off_axis <= M_PI / 2)
@@ -461,6 +466,52 @@ void SolveSubsample(const Association& a, int max_points, std::vector<Eigen::Vec
   }
 }
 
+// The share of T observations with AR(1)-correlated errors (correlation
+// exp(-1 / tau) between neighbours) that their mean counts as independent:
+// N_eff / T = T / sum_ij rho^|i - j| (1 for T = 1 or tau = 0; -> (1 - rho) / (1 + rho)).
+double CorrelatedObservationShare(int num_observations, double tau) {
+  if (tau <= 0.0 || num_observations <= 1) return 1.0;
+  const double rho = std::exp(-1.0 / tau);
+  const int n = num_observations;
+  double sum = n;
+  double power = 1.0;
+  for (int lag = 1; lag < n; ++lag) {
+    power *= rho;
+    sum += 2.0 * (n - lag) * power;
+  }
+  return n / sum;
+}
+
+// The detected box sizes as observations of each code (detection_size_cost.h),
+// the inside box's size linearised about the code the solve starts from.
+// Joint mode: every frame's detection observes the one code, each counting
+// CorrelatedObservationShare of an observation (correlated detector errors); single-frame
+// mode: each frame's code its own detection, once.
+void AddDetectionSizeTerms(const ShapeLookup& lookup, const Track& track, const FitOptions& options,
+                           double frame_weight, FitState* state, ceres::Problem* problem) {
+  if (options.detection_size_sigma <= 0.0) return;
+  const bool single = options.single_frame;
+  const double per_frame =
+      frame_weight * (single ? 1.0 : CorrelatedObservationShare(int(track.frames.size()),
+                                                                options.detection_correlation_frames));
+  // Half a sigma: wide enough to smooth the box's voxel kinks, narrow enough to stay local.
+  constexpr double kStep = 0.5;
+  for (int c = 0; c < int(state->codes.size()); ++c) {
+    ShapeLookup::BoxSizeLinearisation lin;
+    if (!lookup.LineariseInsideBoxSize(state->codes[c], kStep, &lin)) continue;
+    const int first = single ? c : 0;
+    const int last = single ? c + 1 : int(track.frames.size());
+    for (int k = first; k < last; ++k) {
+      const ObjectLabel& d = track.frames[k].detection;
+      const Eigen::Vector3d detected(d.length, d.height, d.width);  // the box's x, y, z extent
+      if (!(detected.array() > 0.0).all() || !detected.allFinite()) continue;
+      problem->AddResidualBlock(DetectionSizeCost::Create(state->codes[c], lin.size, lin.jacobian, detected,
+                                                          options.detection_size_sigma, per_frame),
+                                nullptr, state->codes[c].data());
+    }
+  }
+}
+
 SolveReport Solve(const ShapeLookup& lookup, const Track& track,
                   const std::vector<Association>& data, double sigma_scale,
                   const FitOptions& options, FitState* state) {
@@ -482,6 +533,7 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
           nullptr, state->codes[c].data());
     }
   }
+  AddDetectionSizeTerms(lookup, track, options, frame_weight, state, &problem);
   for (int k = 0; k < num_frames; ++k) {
     const TrackFrame& f = track.frames[k];
     double* z = state->codes[single ? k : 0].data();

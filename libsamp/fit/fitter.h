@@ -82,6 +82,17 @@ struct FitOptions {
   double sigma_ground = 0.1;
   // Weight lambda of the shape prior lambda sum (z_i / sigma_i)^2.
   double shape_prior_weight = 1.0;
+  // The detections' box sizes as observations of the shape (docs/fitting.md,
+  // "Detected size"; detection_size_cost.h): std. dev. of a detected length,
+  // height and width, m (0 = the term is off, as in the paper). Default: a
+  // stereo 3D detector's ~0.3 m (issue 11's detector model; the tracker's
+  // TrackerOptions::size_sigma).
+  double detection_size_sigma = 0.3;
+  // A detector errs the same way for a few frames: consecutive detections'
+  // errors correlate as exp(-1 / tau), tau = this many frames (0 = white), so a
+  // track's T detections count T (1 - rho) / (1 + rho) independent ones
+  // (an AR(1) mean). Default: the 3 frames of issue 11's detector model.
+  double detection_correlation_frames = 3.0;
   // Motion-model thresholds: |v| < standing_speed -> standing (m/s);
   // |omega| < straight_yaw_rate -> straight line (rad/s), else circular arc.
   double standing_speed = 1.0;

@@ -236,4 +236,25 @@ AlignedBox ShapeLookup::InsideBox(const Eigen::VectorXd& z) const {
   return box;
 }
 
+bool ShapeLookup::LineariseInsideBoxSize(const Eigen::VectorXd& z, double step,
+                                         BoxSizeLinearisation* out) const {
+  SAMP_CHECK(int(z.size()) == num_components_ && step > 0.0)
+      << "LineariseInsideBoxSize: code of " << z.size() << " values (expected " << num_components_
+      << ") or step " << step << " <= 0";
+  const AlignedBox box = InsideBox(z);
+  if (box.IsEmpty()) return false;
+  out->size = box.Size();
+  out->jacobian.resize(3, num_components_);
+  for (int i = 0; i < num_components_; ++i) {
+    const double h = step * sigmas_[i];
+    Eigen::VectorXd plus = z, minus = z;
+    plus[i] += h;
+    minus[i] -= h;
+    const AlignedBox a = InsideBox(plus), b = InsideBox(minus);
+    if (a.IsEmpty() || b.IsEmpty()) return false;
+    out->jacobian.col(i) = (a.Size() - b.Size()) / (2.0 * h);
+  }
+  return true;
+}
+
 }  // namespace samp

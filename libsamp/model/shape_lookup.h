@@ -58,6 +58,17 @@ class ShapeLookup {
   // is nowhere negative.
   AlignedBox InsideBox(const Eigen::VectorXd& z) const;
 
+  // The size (x, y, z extent = length, height, width) of InsideBox linearised
+  // about z: size(z + dz) ~ size + jacobian dz, the Jacobian by central
+  // differences over +-step sigma_i along each component (the box moves in
+  // voxel-sized kinks, so a step of a fraction of sigma smooths them).
+  // Returns false when the box is empty at z or at a step.
+  struct BoxSizeLinearisation {
+    Eigen::Vector3d size = Eigen::Vector3d::Zero();
+    Eigen::Matrix<double, 3, Eigen::Dynamic> jacobian;
+  };
+  bool LineariseInsideBoxSize(const Eigen::VectorXd& z, double step, BoxSizeLinearisation* out) const;
+
  private:
   GridSpec grid_;
   int num_components_ = 0;

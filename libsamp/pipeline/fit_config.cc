@@ -83,6 +83,8 @@ void OptionFields(OptionsJson& io, FitOptions& o) {
   io("outlier_threshold", o.outlier_threshold);
   io("sigma_ground", o.sigma_ground);
   io("shape_prior_weight", o.shape_prior_weight);
+  io("detection_size_sigma", o.detection_size_sigma);
+  io("detection_correlation_frames", o.detection_correlation_frames);
   io("standing_speed", o.standing_speed);
   io("straight_yaw_rate", o.straight_yaw_rate);
   io("max_motion_off_axis", o.max_motion_off_axis);

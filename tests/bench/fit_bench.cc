@@ -83,11 +83,12 @@ void BM_Fit(benchmark::State& state) {
   const DataTerm terms[] = {DataTerm::kPaper, DataTerm::kRayDepth, DataTerm::kDisparity};
   options.data_term = terms[state.range(2)];
   options.max_solve_points_per_frame = int(state.range(3));
-  // term 0 = the paper's energy (mean weighting, Huber); 1 = the default
+  // term 0 = the paper's energy (mean weighting, Huber, no detected size); 1 = the default
   // (ray depth, effective weighting, mixture); 2 = the disparity term (effective).
   if (options.data_term == DataTerm::kPaper) {
     options.data_weighting = DataWeighting::kMean;
     options.mixture_loss = false;
+    options.detection_size_sigma = 0.0;
   }
   RunFit(state, options);
 }

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/fit/detection_size_cost.h"
 #include "libsamp/fit/ground_cost.h"
 #include "libsamp/fit/motion_cost.h"
 #include "libsamp/fit/sdf_cost.h"
@@ -631,6 +632,46 @@ TEST(ShapePriorCost, ResidualAndJacobian) {
   EXPECT_NEAR(r[1], -2.0, 1e-15);
   EXPECT_NEAR(r[2], 1.0, 1e-15);
   ExpectJacobiansMatch(cost, {z}, 1e-7, "shape prior");
+}
+
+TEST(DetectionSizeCost, ResidualAndJacobian) {
+  const Eigen::VectorXd z0 = Eigen::Vector3d(0.5, -0.2, 0.1);
+  Eigen::Matrix<double, 3, Eigen::Dynamic> jacobian(3, 3);
+  jacobian << 0.1, 0.0, -0.2, 0.05, 0.3, 0.0, 0.0, -0.1, 0.4;
+  const Eigen::Vector3d size0(4.0, 1.5, 1.7), detected(4.3, 1.4, 1.8);
+  DetectionSizeCost cost(z0, size0, jacobian, detected, 0.3, 0.25);
+  double z[3] = {1.0, -1.0, 0.25};
+  double r[3];
+  const double* params[1] = {z};
+  ASSERT_TRUE(cost.Evaluate(params, r, nullptr));
+  const Eigen::Vector3d expected =
+      std::sqrt(0.25) / 0.3 * (size0 + jacobian * (Eigen::Map<Eigen::Vector3d>(z) - z0) - detected);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(r[i], expected[i], 1e-14);
+  ExpectJacobiansMatch(cost, {z}, 1e-7, "detection size");
+}
+
+TEST(ShapeLookup, LinearisedInsideBoxSizePredictsTheBox) {
+  // The linearisation about a code predicts the inside box a quarter sigma
+  // away better than the box at the code itself does.
+  const ShapeLookup& lookup = Lookup();
+  const int nr = lookup.num_components();
+  Eigen::VectorXd z = Eigen::VectorXd::Zero(nr);
+  z[0] = 0.5 * lookup.sigmas()[0];
+  ShapeLookup::BoxSizeLinearisation lin;
+  ASSERT_TRUE(lookup.LineariseInsideBoxSize(z, 0.5, &lin));
+  EXPECT_LT((lin.size - lookup.InsideBox(z).Size()).norm(), 1e-12);
+  ASSERT_EQ(lin.jacobian.cols(), nr);
+  EXPECT_GT(lin.jacobian.cwiseAbs().maxCoeff(), 0.0);
+  for (int i = 0; i < nr; ++i) {
+    Eigen::VectorXd dz = Eigen::VectorXd::Zero(nr);
+    dz[i] = 0.25 * lookup.sigmas()[i];
+    const Eigen::Vector3d actual = lookup.InsideBox(z + dz).Size();
+    const Eigen::Vector3d predicted = lin.size + lin.jacobian * dz;
+    EXPECT_LE((predicted - actual).cwiseAbs().maxCoeff(),
+              std::max(0.02, 0.5 * (lin.size - actual).cwiseAbs().maxCoeff()))
+        << "component " << i << ": predicted " << predicted.transpose() << ", actual " << actual.transpose();
+  }
+  EXPECT_THROW(lookup.LineariseInsideBoxSize(Eigen::VectorXd::Zero(nr + 1), 0.5, &lin), Error);
 }
 
 }  // namespace

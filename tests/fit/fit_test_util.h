@@ -169,6 +169,7 @@ inline Synthetic MakeTrack(const ShapeLookup& lookup, int num_frames, double spe
   s.z_true << 1.2, -0.8, 0.6, 0.0, -0.5;
   s.z_true = s.z_true.cwiseProduct(lookup.sigmas());
   if (z_true != nullptr) s.z_true = *z_true;
+  const Eigen::Vector3d true_size = lookup.InsideBox(s.z_true).Size();
   s.track.id = 3;
   s.track.sequence = "synthetic";
   Eigen::Vector4d pose(-4.0, 1.65, 14.0, 0.4);
@@ -194,9 +195,10 @@ inline Synthetic MakeTrack(const ShapeLookup& lookup, int num_frames, double spe
     f.detection.position = pose.head<3>() + Eigen::Vector3d(0.1 * detection_noise.x(), 0.05 * detection_noise.y(),
                                                             0.1 * detection_noise.z());
     f.detection.rotation_y = WrapAngle(pose[3] + 0.05 * n(rng) + (k == flipped_frame ? M_PI : 0.0));
-    f.detection.height = 1.5;
-    f.detection.width = 1.7;
-    f.detection.length = 4.0;
+    // Size: the true shape's box (a detector without size error).
+    f.detection.length = true_size.x();
+    f.detection.height = true_size.y();
+    f.detection.width = true_size.z();
     // Points visible from the camera, with noise, plus 5 % outliers.
     const Eigen::Vector3d view =
         (world_from_object.inverse() * Eigen::Vector3d::Zero()).normalized();

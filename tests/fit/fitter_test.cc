@@ -250,6 +250,8 @@ TEST(Fitter, StandingCarAndSingleFrameMode) {
   Track far = s.track;
   far.frames[2].detection.position.x() += 8.0;
   options.association_radius = 12.0;  // so that the points still reach the far detection
+  // The stereo alone: the detected size would hold the far frame's shape.
+  options.detection_size_sigma = 0.0;
   const InitialState init = InitializeTrack(far, options);
   options.max_position_change = 0.05;
   const TrackFit reset = TrackFitter(Model(), options).Fit(far);
@@ -362,6 +364,8 @@ TEST(Fitter, ShapesLeaveTheMeanUnderStereoNoise) {
       }
     }
     FitOptions options;  // defaults: ray-depth term, mixture, effective weighting (80 px)
+    // The stereo evidence alone (MakeTrack's detections carry the true size).
+    options.detection_size_sigma = 0.0;
     const TrackFit fit = TrackFitter(Model(), options).Fit(s.track);
     EXPECT_TRUE(fit.summary.usable);
     const double h_fit = Height(lookup, fit.shape_code);
@@ -386,6 +390,75 @@ TEST(Fitter, ShapesLeaveTheMeanUnderStereoNoise) {
     EXPECT_LT(std::abs(h_mean_fit - h_mean), std::abs(h_fit - h_mean))
         << "mean weighting: fitted " << h_mean_fit;
   }
+}
+
+TEST(Fitter, DetectedSizesMoveFarShapesTowardsTheTruth) {
+  // A car 2 sigma longer than the mean (along the component that changes the
+  // length most) at ~34 m, standing, 21 frames; stereo noise of 0.5 px along
+  // the ray (sigma_d ~1.5 m) on the visible points; detected sizes with the
+  // detector model's error (0.3 m per dimension, AR(1) over 3 frames). The
+  // stereo alone leaves the shape near the mean; with the detected sizes the
+  // fitted length and size are nearer the truth.
+  const ShapeLookup lookup(Model());
+  const int nr = lookup.num_components();
+  int component = 0;
+  double best = 0.0;
+  for (int r = 0; r < nr; ++r) {
+    Eigen::VectorXd plus = Eigen::VectorXd::Zero(nr), minus = plus;
+    plus[r] = 2.0 * lookup.sigmas()[r];
+    minus[r] = -2.0 * lookup.sigmas()[r];
+    const double change = std::abs(lookup.InsideBox(plus).Size().x() - lookup.InsideBox(minus).Size().x());
+    if (change > best) best = change, component = r;
+  }
+  Eigen::VectorXd z_true = Eigen::VectorXd::Zero(nr);
+  z_true[component] = 2.0 * lookup.sigmas()[component];
+  const Eigen::Vector3d size_true = lookup.InsideBox(z_true).Size();
+  const double l_mean = lookup.InsideBox(Eigen::VectorXd::Zero(nr)).Size().x();
+  ASSERT_GT(std::abs(size_true.x() - l_mean), 0.2);
+  const Eigen::Vector4d start(-3.0, 1.65, 34.0, 0.3);
+  Synthetic s = MakeTrack(lookup, 21, 0.0, 0.0, 1200, 41, -1, &z_true, &start);
+  std::mt19937 rng(42);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const double bf = 0.54 * 721.5, sigma_disp = 0.5;
+  const double rho = std::exp(-1.0 / 3.0);
+  Eigen::Vector3d size_error = 0.3 * testing::DrawVector(n, rng);
+  for (size_t k = 0; k < s.track.frames.size(); ++k) {
+    TrackFrame& f = s.track.frames[k];
+    testing::KeepVisible(lookup, z_true, WorldFromObject(s.poses_true[k].head<3>(), s.poses_true[k][3]),
+                         Eigen::Vector3d::Zero(), &f.candidate_points_in_world, &f.candidate_sigmas);
+    for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
+      Eigen::Vector3d& p = f.candidate_points_in_world[i];
+      const double depth = p.z();
+      const double noisy_depth = bf / (bf / depth + sigma_disp * n(rng));
+      p *= noisy_depth / depth;
+      f.candidate_sigmas[i] = noisy_depth * noisy_depth * sigma_disp / bf;
+    }
+    if (k > 0) size_error = rho * size_error + std::sqrt(1.0 - rho * rho) * 0.3 * testing::DrawVector(n, rng);
+    f.detection.length = size_true.x() + size_error.x();
+    f.detection.height = size_true.y() + size_error.y();
+    f.detection.width = size_true.z() + size_error.z();
+  }
+
+  FitOptions options;
+  const TrackFit with = TrackFitter(Model(), options).Fit(s.track);
+  options.detection_size_sigma = 0.0;
+  const TrackFit without = TrackFitter(Model(), options).Fit(s.track);
+  ASSERT_TRUE(with.summary.usable && without.summary.usable);
+  const Eigen::Vector3d size_with = lookup.InsideBox(with.shape_code).Size();
+  const Eigen::Vector3d size_without = lookup.InsideBox(without.shape_code).Size();
+  const double l_with = std::abs(size_with.x() - size_true.x());
+  const double l_without = std::abs(size_without.x() - size_true.x());
+  EXPECT_LT(l_with, 0.5 * l_without) << "true length " << size_true.x() << ", mean " << l_mean << ", fitted "
+                                     << size_with.x() << " with the detected sizes, " << size_without.x()
+                                     << " without";
+  EXPECT_LT(l_with, 0.25);
+  EXPECT_LT((size_with - size_true).norm(), 0.5 * (size_without - size_true).norm())
+      << "true size " << size_true.transpose() << ", fitted " << size_with.transpose() << " with the detected sizes, "
+      << size_without.transpose() << " without";
+  // (Measured 2026-12-02: length 4.50 / 4.15 m for 4.53 m. The origin does not
+  // follow here: +0.21 m along the ray with the sizes, +0.11 m without, the
+  // ray-depth term's own offset under 1.5 m depth noise; on the street
+  // benchmark the far origins did improve, docs/fitting.md "Detected size".)
 }
 
 TEST(Fitter, OneFrameTrackInJointModeIsTheSingleFrameProblem) {

@@ -156,6 +156,15 @@ void RegisterFitCommand(CLI::App* app) {
                       "the data weight stays that of all of them); 0 = all")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  command->add_option("--detection-size-sigma", o.fit.detection_size_sigma,
+                      "Std. dev. of the detections' box sizes, which observe the shape's length, height and "
+                      "width (docs/fitting.md, \"Detected size\"), m; 0 = off (the paper)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  command->add_option("--detection-correlation", o.fit.detection_correlation_frames,
+                      "Frames over which the detector's errors are correlated (exp(-1/tau)); 0 = independent")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
   command->add_option("--correlation-area", o.fit.correlation_area_px,
                       "Image area over which stereo errors are correlated (effective weighting), px")
       ->capture_default_str()
