@@ -11,6 +11,7 @@
 //   BM_Fit/.../cap:N          FitOptions::max_solve_points_per_frame = N
 //                             (0 = all 5,000 points of a frame in every solve;
 //                             250 = the default)
+//   BM_FitWithoutDetectedSize  the default fit with --detection-size-sigma 0
 //   BM_FitLinearSolver/<solver>  the single solve with other linear solvers
 //   BM_FitAutodiffPerPoint       the same single solve with one autodiff
 //                                cost block per point (for comparison)
@@ -109,6 +110,16 @@ BENCHMARK(BM_Fit)
     ->Args({0, 1, 2, 0})
     ->Args({1, 1, 2, 0})
     ->Unit(benchmark::kMillisecond);
+
+// The default fit (with the EM pass) without the detected-size term, to
+// measure what the term costs (its box linearisations) against BM_Fit/em:1/
+// compressed:1/term:1/cap:250 in the same run.
+void BM_FitWithoutDetectedSize(benchmark::State& state) {
+  FitOptions options;
+  options.detection_size_sigma = 0.0;
+  RunFit(state, options);
+}
+BENCHMARK(BM_FitWithoutDetectedSize)->Unit(benchmark::kMillisecond);
 
 void BM_FitLinearSolver(benchmark::State& state) {
   FitOptions options;
