@@ -1,5 +1,7 @@
 #include "tests/eval/test_scene.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -93,6 +95,27 @@ std::string MakeTempFolder(const std::string& name) {
   fs::remove_all(path);
   fs::create_directories(path);
   return path.string();
+}
+
+BoxCarScene::BoxCarScene(const std::string& name, uint64_t seed, int num_sequences, int num_frames) {
+  root = MakeTempFolder(name);
+  SynthOptions synth = QuickSynthOptions(root + "/seqs", seed, SynthScene::kClean);
+  synth.num_sequences = num_sequences;
+  synth.num_frames = num_frames;
+  synth.detector.flip_probability = 0.0;
+  for (const SynthSequenceInfo& q : SynthesizeSequences(synth, {{"boxcar", MakeBoxCar(4.2)}}).sequences) {
+    sequences.push_back(q.folder);
+    names.push_back(q.name);
+  }
+  model = root + "/box_model.vdb";
+  MakeBoxModel().Save(model);
+}
+
+BoxCarScene::~BoxCarScene() {
+  if (!root.empty() && ::testing::UnitTest::GetInstance()->Passed()) {
+    std::error_code ignored;
+    std::filesystem::remove_all(root, ignored);
+  }
 }
 
 }  // namespace samp::test

@@ -23,36 +23,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The scene's folder goes when the binary ends with every test passed.
-struct Scene {
-  ~Scene() {
-    if (!root.empty() && ::testing::UnitTest::GetInstance()->Passed()) {
-      std::error_code ignored;
-      fs::remove_all(root, ignored);
-    }
-  }
-  std::string root;
-  std::vector<std::string> sequences, names;
-  std::string model;
-};
-
 // Two sequences of 4 frames (clean preset) and the box model.
-const Scene& TheScene() {
-  static const Scene scene = [] {
-    Scene s;
-    s.root = test::MakeTempFolder("fit_command");
-    SynthOptions synth = test::QuickSynthOptions(s.root + "/seqs", 11, SynthScene::kClean);
-    synth.num_frames = 4;
-    synth.detector.flip_probability = 0.0;
-    for (const SynthSequenceInfo& q :
-         SynthesizeSequences(synth, {{"boxcar", test::MakeBoxCar(4.2)}}).sequences) {
-      s.sequences.push_back(q.folder);
-      s.names.push_back(q.name);
-    }
-    s.model = s.root + "/box_model.vdb";
-    test::MakeBoxModel().Save(s.model);
-    return s;
-  }();
+const test::BoxCarScene& TheScene() {
+  static const test::BoxCarScene scene("fit_command", 11, 2, 4);
   return scene;
 }
 
@@ -117,7 +90,7 @@ std::string LastLine(const std::string& text) {
 // which no command-line option can): exit status 1 with one error line, and
 // the run's record is still written.
 TEST(FitCommand, EveryTrackFailedExitsOne) {
-  const Scene& scene = TheScene();
+  const test::BoxCarScene& scene = TheScene();
   const std::string runs = Folder("every_track_failed");
   const std::string out = runs + "/out";
   std::string err;
@@ -141,7 +114,7 @@ TEST(FitCommand, EveryTrackFailedExitsOne) {
 }
 
 TEST(FitCommand, SameNamedSequencesExitOneBeforeFitting) {
-  const Scene& scene = TheScene();
+  const test::BoxCarScene& scene = TheScene();
   const std::string runs = Folder("same_name");
   const std::string a = runs + "/a/" + scene.names[0], b = runs + "/b/" + scene.names[0];
   fs::create_directories(runs + "/a");
@@ -165,7 +138,7 @@ TEST(FitCommand, SameNamedSequencesExitOneBeforeFitting) {
 // the earlier output exactly as it was and no temporary folder; the process
 // ends by the signal.
 TEST(FitCommand, InterruptedRunLeavesTheEarlierOutput) {
-  const Scene& scene = TheScene();
+  const test::BoxCarScene& scene = TheScene();
   ASSERT_EQ(scene.sequences.size(), 2u);
   const std::string runs = Folder("interrupted");
   const std::string out = runs + "/out";
