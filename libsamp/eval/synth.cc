@@ -1187,24 +1187,23 @@ std::vector<SynthCar> LoadSynthCars(const SynthCarSource& source) {
                                                     << " does not exist";
     Manifest manifest;
     if (!source.manifest_path.empty()) manifest = LoadManifest(source.manifest_path);
-    // Symlinked folders are followed, each folder walked once (no copies from a loop).
-    std::vector<fs::path> files;
-    for (const std::string& path : ListMeshFiles(source.cad_folder)) files.push_back(path);
-    std::sort(files.begin(), files.end());  // the order of fs::path, as before
-    for (const fs::path& file : files) {
-      const std::string relative = file.lexically_relative(source.cad_folder).generic_string();
-      const ManifestEntry* entry = manifest.Find(relative);
-      const std::string name = entry && !entry->name.empty() ? entry->name : file.stem().string();
-      const bool selected = wanted.empty() || wanted.count(Lower(name)) ||
-                            wanted.count(Lower(file.stem().string()));
+    std::vector<CadFile> files = ListCadFiles(source.cad_folder, &manifest);
+    std::sort(files.begin(), files.end(), [](const CadFile& a, const CadFile& b) {
+      return fs::path(a.path) < fs::path(b.path);  // the order of fs::path, as before
+    });
+    for (const CadFile& file : files) {
+      const std::string& relative = file.relative_path;
+      const ManifestEntry* entry = file.entry;
+      const std::string& name = file.name;
+      const std::string stem = fs::path(file.path).stem().string();
+      const bool selected = wanted.empty() || wanted.count(Lower(name)) || wanted.count(Lower(stem));
       if (!selected) continue;
       if (entry && entry->skip && !(source.ignore_skip_for_only && !wanted.empty())) {
         LogDebug() << "synth: skipping " << relative << " (manifest: " << entry->skip_reason << ")";
         continue;
       }
-      const CanonicalizeOptions& canonicalize = entry ? entry->canonicalize : manifest.defaults;
-      const Mesh cad_mesh = LoadMesh(file.string());
-      const CanonicalizeResult result = Canonicalize(cad_mesh, canonicalize);
+      const Mesh cad_mesh = LoadMesh(file.path);
+      const CanonicalizeResult result = Canonicalize(cad_mesh, file.canonicalize);
       for (const std::string& warning : result.warnings) {
         LogWarning() << "synth: " << relative << ": " << warning;
       }
@@ -1212,7 +1211,7 @@ std::vector<SynthCar> LoadSynthCars(const SynthCarSource& source) {
       cars.push_back({name, result.mesh, result.wheels_added ? int(cad_mesh.triangles.size()) : -1});
       if (result.wheels_added) LogDebug() << "synth: " << name << ": " << result.wheels.BriefReport();
       found.insert(Lower(name));
-      found.insert(Lower(file.stem().string()));
+      found.insert(Lower(stem));
     }
   }
   for (const std::string& path : source.canonical_meshes) {

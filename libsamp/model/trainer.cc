@@ -71,36 +71,24 @@ std::vector<Job> FindJobs(const TrainOptions& options, const Manifest* manifest)
   SAMP_CHECK(fs::is_directory(folder, ec))
       << "CAD folder '" << options.cad_folder << "' is not a directory";
   std::vector<Job> jobs;
-  // Symlinked folders are followed, each folder walked once (no copies from a loop).
-  for (const std::string& path : ListMeshFiles(options.cad_folder)) {
+  std::map<const ManifestEntry*, int> matched;
+  for (const CadFile& file : ListCadFiles(options.cad_folder, manifest)) {
     Job job;
-    job.path = path;
-    job.relative_path = fs::path(path).lexically_relative(folder).generic_string();
+    job.path = file.path;
+    job.relative_path = file.relative_path;
+    job.name = file.name;
+    job.canonicalize = file.canonicalize;
+    if (file.entry != nullptr) {
+      ++matched[file.entry];
+      job.skip = file.entry->skip;
+      job.skip_reason = file.entry->skip_reason.empty() ? "no reason given" : file.entry->skip_reason;
+    } else if (!options.preset.empty()) {
+      job.canonicalize = CanonicalPreset(options.preset);
+    }
     jobs.push_back(std::move(job));
   }
-  std::sort(jobs.begin(), jobs.end(),
-            [](const Job& a, const Job& b) { return a.relative_path < b.relative_path; });
   SAMP_CHECK(!jobs.empty()) << "no mesh files (any format assimp reads) in CAD folder '"
                             << options.cad_folder << "'";
-
-  std::map<const ManifestEntry*, int> matched;
-  for (Job& job : jobs) {
-    const ManifestEntry* entry = manifest != nullptr ? manifest->Find(job.relative_path) : nullptr;
-    if (entry != nullptr) {
-      ++matched[entry];
-      job.name = entry->name;
-      job.canonicalize = entry->canonicalize;
-      job.skip = entry->skip;
-      job.skip_reason = entry->skip_reason.empty() ? "no reason given" : entry->skip_reason;
-    } else {
-      job.name = fs::path(job.relative_path).stem().string();
-      if (!options.preset.empty()) {
-        job.canonicalize = CanonicalPreset(options.preset);
-      } else if (manifest != nullptr) {
-        job.canonicalize = manifest->defaults;
-      }
-    }
-  }
   if (manifest != nullptr) {
     for (const ManifestEntry& entry : manifest->entries) {
       if (matched.count(&entry) == 0) {
@@ -284,10 +272,31 @@ std::string TrainSummary::BriefReport() const {
     for (int r = 0; r < eigenvalues.size(); ++r) out << " " << eigenvalues[r];
     out << "\nstandard deviations (m):     ";
     for (int r = 0; r < eigenvalues.size(); ++r) out << " " << std::sqrt(eigenvalues[r]);
-    out << "\nexplained variance: " << FormatFixed(100.0 * explained_variance, 1) << " %";
+    out << "\nexplained variance: " << Fixed(100.0 * explained_variance, 1) << " %";
   }
   out << "\ntotal time: " << Progress::FormatDuration(seconds) << "\n";
   return out.str();
+}
+
+CanonicalizeResult CanonicalCad(const std::string& path, const CanonicalizeOptions& options,
+                                const Eigen::Vector3d& size_factors) {
+  CanonicalizeResult canonical = Canonicalize(LoadMesh(path), options);
+  if (size_factors != Eigen::Vector3d::Ones()) {
+    // Canonical frame: x front (length), y down (height), z left (width),
+    // origin at the bottom centre, which the stretch keeps in place.
+    canonical.mesh.Transform(Eigen::Affine3d(size_factors.asDiagonal()));
+    canonical.size = canonical.size.cwiseProduct(size_factors);
+  }
+  return canonical;
+}
+
+ScannedSdf ScanToSdf(const Mesh& canonical_mesh, const ScanOptions& scan, const GridSpec& grid,
+                     const SdfOptions& sdf) {
+  ScannedSdf result;
+  result.scan = ScanMesh(canonical_mesh, scan);
+  SAMP_CHECK(result.scan.num_hits > 0) << "no scan ray hit the mesh";
+  result.sdf = ComputeSdf(canonical_mesh, result.scan, grid, sdf, /*parallel=*/true);
+  return result;
 }
 
 TrainSummary TrainShapeModel(const TrainOptions& options) {
@@ -329,22 +338,14 @@ TrainSummary TrainShapeModel(const TrainOptions& options) {
       }
       const auto model_start = Clock::now();
       try {
-        const Mesh cad_mesh = LoadMesh(job.path);
-        CanonicalizeResult canonical = Canonicalize(cad_mesh, job.canonicalize);
-        if (job.size_factors != Eigen::Vector3d::Ones()) {
-          // Canonical frame: x front (length), y down (height), z left (width),
-          // origin at the bottom centre, which the stretch keeps in place.
-          canonical.mesh.Transform(Eigen::Affine3d(job.size_factors.asDiagonal()));
-          canonical.size = canonical.size.cwiseProduct(job.size_factors);
-        }
+        const CanonicalizeResult canonical = CanonicalCad(job.path, job.canonicalize, job.size_factors);
         for (const std::string& warning : canonical.warnings) {
           LogWarning() << job.relative_path << ": " << warning;
         }
         shape.scale = canonical.scale;
         shape.size = canonical.size;
-        const ScanResult scan = ScanMesh(canonical.mesh, options.scan);
-        SAMP_CHECK(scan.num_hits > 0) << "no scan ray hit the mesh";
-        Sdf sdf = ComputeSdf(canonical.mesh, scan, options.grid, options.sdf, /*parallel=*/true);
+        ScannedSdf scanned = ScanToSdf(canonical.mesh, options.scan, options.grid, options.sdf);
+        Sdf& sdf = scanned.sdf;
         shape.inside_fraction = sdf.summary.inside_fraction;
         SAMP_CHECK(sdf.summary.sign_ok)
             << "sign failed: inside fraction " << sdf.summary.inside_fraction
