@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <random>
 
 namespace samp::test {
@@ -97,6 +99,13 @@ std::string MakeTempFolder(const std::string& name) {
   return path.string();
 }
 
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
 BoxCarScene::BoxCarScene(const std::string& name, uint64_t seed, int num_sequences, int num_frames) {
   root = MakeTempFolder(name);
   SynthOptions synth = QuickSynthOptions(root + "/seqs", seed, SynthScene::kClean);
@@ -109,6 +118,13 @@ BoxCarScene::BoxCarScene(const std::string& name, uint64_t seed, int num_sequenc
   }
   model = root + "/box_model.vdb";
   MakeBoxModel().Save(model);
+}
+
+std::string BoxCarScene::Folder(const std::string& name) const {
+  const std::filesystem::path folder = std::filesystem::path(root) / name;
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  return folder.string();
 }
 
 BoxCarScene::~BoxCarScene() {

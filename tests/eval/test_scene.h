@@ -27,6 +27,9 @@ ShapeModel MakeBoxModel();
 // A fresh empty folder under the system temp directory.
 std::string MakeTempFolder(const std::string& name);
 
+// The bytes of a file ("" when it cannot be read).
+std::string ReadText(const std::string& path);
+
 // `num_sequences` sequences of `num_frames` frames of the clean preset (box
 // cars, no flipped detections; QuickSynthOptions with `seed`) in a fresh temp
 // folder named after `name`, with the box model beside them. The destructor
@@ -37,6 +40,9 @@ struct BoxCarScene {
   ~BoxCarScene();
   BoxCarScene(const BoxCarScene&) = delete;
   BoxCarScene& operator=(const BoxCarScene&) = delete;
+
+  // A fresh empty folder ROOT/name for one test (an earlier one is removed).
+  std::string Folder(const std::string& name) const;
 
   std::string root;
   std::vector<std::string> sequences, names;  // each sequence's folder and its <seq>

@@ -54,27 +54,12 @@ RunFitOptions UnusableOptions(const std::vector<std::string>& sequences, const s
   return o;
 }
 
-// A fresh folder for one test, beside nothing else.
-std::string Folder(const std::string& name) {
-  const fs::path folder = fs::path(TheScene().root) / name;
-  fs::remove_all(folder);
-  fs::create_directories(folder);
-  return folder.string();
-}
-
 // Every path under `folder`, relative, sorted.
 std::set<std::string> Listing(const std::string& folder) {
   std::set<std::string> paths;
   for (const auto& entry : fs::recursive_directory_iterator(folder))
     paths.insert(entry.path().lexically_relative(folder).string());
   return paths;
-}
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 // The names in `folder` that start with ".tmp." (temporaries of samp).
@@ -95,7 +80,7 @@ using test::ErrorOf;
 // of the earlier run survives.
 TEST(RunFit, ReplacesTheOutputOfAnEarlierRun) {
   const test::BoxCarScene& scene = TheScene();
-  const std::string runs = Folder("replace");
+  const std::string runs = TheScene().Folder("replace");
   const std::string out = runs + "/out";
   const std::string labels = out + "/label_02/" + scene.names[0] + ".txt";
 
@@ -135,13 +120,13 @@ TEST(RunFit, ReplacesTheOutputOfAnEarlierRun) {
 // last) leaves the earlier output exactly as it was and no temporary folder.
 TEST(RunFit, RunThatThrowsLeavesTheOutputAsItWas) {
   const test::BoxCarScene& scene = TheScene();
-  const std::string runs = Folder("throws");
+  const std::string runs = TheScene().Folder("throws");
   const std::string out = runs + "/out";
   RunFitOptions options = Options(scene.model, {scene.sequences[0]}, out);
   options.write_meshes = false;
   ASSERT_GT(RunFit(options).num_tracks_fitted, 0);
   const std::set<std::string> listing = Listing(out);
-  const std::string tracks = ReadText(out + "/tracks.json");
+  const std::string tracks = test::ReadText(out + "/tracks.json");
 
   RunFitOptions no_model = options;
   no_model.model_path = runs + "/missing.vdb";
@@ -162,7 +147,7 @@ TEST(RunFit, RunThatThrowsLeavesTheOutputAsItWas) {
   EXPECT_TRUE(called);
 
   EXPECT_EQ(Listing(out), listing);
-  EXPECT_EQ(ReadText(out + "/tracks.json"), tracks);
+  EXPECT_EQ(test::ReadText(out + "/tracks.json"), tracks);
   EXPECT_TRUE(Temporaries(runs).empty());
 }
 
@@ -170,13 +155,13 @@ TEST(RunFit, RunThatThrowsLeavesTheOutputAsItWas) {
 // before anything is read, and stay as they were.
 TEST(RunFit, RefusesOutputFoldersItMustNotReplace) {
   const test::BoxCarScene& scene = TheScene();
-  const std::string runs = Folder("refuse");
+  const std::string runs = TheScene().Folder("refuse");
 
   const std::string file = runs + "/a_file";
   WriteTextFileAtomically(file, "keep");
   EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, file)); }).find("is not a folder"),
             std::string::npos);
-  EXPECT_EQ(ReadText(file), "keep");
+  EXPECT_EQ(test::ReadText(file), "keep");
 
   const std::string mine = runs + "/my_folder";
   WriteTextFileAtomically(mine + "/notes.txt", "keep");
@@ -216,7 +201,7 @@ TEST(RunFit, RefusesOutputFoldersItMustNotReplace) {
 // meshes/<seq>/: an error naming both paths before anything is fitted.
 TEST(RunFit, SameNamedSequencesAreAnError) {
   const test::BoxCarScene& scene = TheScene();
-  const std::string runs = Folder("same_name");
+  const std::string runs = TheScene().Folder("same_name");
   const std::string a = runs + "/a/" + scene.names[0], b = runs + "/b/" + scene.names[0];
   fs::create_directories(runs + "/a");
   fs::create_directories(runs + "/b");
@@ -245,7 +230,7 @@ TEST(RunFit, SameNamedSequencesAreAnError) {
 // a failure (samp fit exits 1) and the hook of a successful run is not called.
 TEST(RunFit, UnusableSolveIsAFailedTrack) {
   const test::BoxCarScene& scene = TheScene();
-  const std::string out = Folder("unusable") + "/out";
+  const std::string out = TheScene().Folder("unusable") + "/out";
   RunFitOptions options = UnusableOptions({scene.sequences[0]}, out);
   bool called = false;
   options.before_commit = [&](const std::string&) { called = true; };
@@ -285,7 +270,7 @@ TEST(RunFit, UnusableSolveIsAFailedTrack) {
 // run beside it; one of a running process is kept.
 TEST(RunFit, RemovesTheTemporaryFolderOfAKilledRun) {
   const test::BoxCarScene& scene = TheScene();
-  const std::string runs = Folder("killed");
+  const std::string runs = TheScene().Folder("killed");
   const pid_t child = ::fork();
   ASSERT_GE(child, 0);
   if (child == 0) ::_exit(0);

@@ -29,20 +29,6 @@ const test::BoxCarScene& TheScene() {
   return scene;
 }
 
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string Folder(const std::string& name) {
-  const fs::path folder = fs::path(TheScene().root) / name;
-  fs::remove_all(folder);
-  fs::create_directories(folder);
-  return folder.string();
-}
-
 // Starts `samp ARGS` with stdout and stderr into `log_prefix`.{out,err}.
 pid_t StartSamp(const std::vector<std::string>& args, const std::string& log_prefix) {
   std::vector<std::string> all = {SAMP_BINARY};
@@ -71,7 +57,7 @@ int RunSamp(const std::vector<std::string>& args, const std::string& log_prefix,
   if (child < 0) return -1;
   int status = 0;
   if (::waitpid(child, &status, 0) != child) return -1;
-  *stderr_text = ReadText(log_prefix + ".err");
+  *stderr_text = test::ReadText(log_prefix + ".err");
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -91,7 +77,7 @@ std::string LastLine(const std::string& text) {
 // the run's record is still written.
 TEST(FitCommand, EveryTrackFailedExitsOne) {
   const test::BoxCarScene& scene = TheScene();
-  const std::string runs = Folder("every_track_failed");
+  const std::string runs = TheScene().Folder("every_track_failed");
   const std::string out = runs + "/out";
   std::string err;
   const int status = RunSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--out", out,
@@ -115,7 +101,7 @@ TEST(FitCommand, EveryTrackFailedExitsOne) {
 
 TEST(FitCommand, SameNamedSequencesExitOneBeforeFitting) {
   const test::BoxCarScene& scene = TheScene();
-  const std::string runs = Folder("same_name");
+  const std::string runs = TheScene().Folder("same_name");
   const std::string a = runs + "/a/" + scene.names[0], b = runs + "/b/" + scene.names[0];
   fs::create_directories(runs + "/a");
   fs::create_directories(runs + "/b");
@@ -140,15 +126,15 @@ TEST(FitCommand, SameNamedSequencesExitOneBeforeFitting) {
 TEST(FitCommand, InterruptedRunLeavesTheEarlierOutput) {
   const test::BoxCarScene& scene = TheScene();
   ASSERT_EQ(scene.sequences.size(), 2u);
-  const std::string runs = Folder("interrupted");
+  const std::string runs = TheScene().Folder("interrupted");
   const std::string out = runs + "/out";
   std::string err;
   ASSERT_EQ(RunSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--out", out, "-q"}, runs + "/log",
                     &err),
             0)
       << err;
-  const std::string tracks_before = ReadText(out + "/tracks.json");
-  const std::string labels_before = ReadText(out + "/label_02/" + scene.names[0] + ".txt");
+  const std::string tracks_before = test::ReadText(out + "/tracks.json");
+  const std::string labels_before = test::ReadText(out + "/label_02/" + scene.names[0] + ".txt");
 
   const std::string fifo = runs + "/blocked_tracks.txt";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
@@ -174,7 +160,7 @@ TEST(FitCommand, InterruptedRunLeavesTheEarlierOutput) {
     }
     int status = 0;
     if (!written && ::waitpid(child, &status, WNOHANG) == child) {
-      FAIL() << "samp ended before it was interrupted: " << ReadText(runs + "/log_interrupted.err");
+      FAIL() << "samp ended before it was interrupted: " << test::ReadText(runs + "/log_interrupted.err");
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
@@ -188,8 +174,8 @@ TEST(FitCommand, InterruptedRunLeavesTheEarlierOutput) {
   for (const auto& entry : fs::directory_iterator(runs)) {
     EXPECT_NE(entry.path().filename().string().rfind(".tmp.", 0), 0u) << "left behind: " << entry.path();
   }
-  EXPECT_EQ(ReadText(out + "/tracks.json"), tracks_before);
-  EXPECT_EQ(ReadText(out + "/label_02/" + scene.names[0] + ".txt"), labels_before);
+  EXPECT_EQ(test::ReadText(out + "/tracks.json"), tracks_before);
+  EXPECT_EQ(test::ReadText(out + "/label_02/" + scene.names[0] + ".txt"), labels_before);
   EXPECT_FALSE(fs::exists(out + "/label_02/" + scene.names[1] + ".txt"));
   EXPECT_FALSE(fs::exists(out + "/meshes/" + scene.names[0]));  // one sequence before: meshes/track_<id>.ply
 }
