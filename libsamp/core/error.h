@@ -1,8 +1,11 @@
 // Errors thrown by libsamp. Library code never aborts the process: bad input
 // raises samp::Error with a message that names the file or field; tools catch
-// it at main, print one line and exit non-zero.
+// it at main, print one line and exit non-zero. In debug builds (NDEBUG not
+// defined) the messages of SAMP_CHECK and SAMP_THROW end with the source file
+// and line that threw, e.g. " [fitter.cc:207]"; release builds leave them out.
 #pragma once
 
+#include <cstring>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -18,9 +21,7 @@ namespace internal {
 // Builds the message lazily so that a passing check costs nothing.
 class ErrorBuilder {
  public:
-  ErrorBuilder(const char* file, int line, const char* condition) {
-    (void)file;
-    (void)line;
+  ErrorBuilder(const char* file, int line, const char* condition) : file_(file), line_(line) {
     if (condition != nullptr && condition[0] != '\0') {
       condition_ = condition;
     }
@@ -33,12 +34,19 @@ class ErrorBuilder {
   [[noreturn]] void Throw() const {
     std::string message = stream_.str();
     if (message.empty()) message = "check failed: " + condition_;
+#ifndef NDEBUG
+    // Debug builds say where: " [fitter.cc:207]" (the source file's name and line).
+    const char* slash = std::strrchr(file_, '/');
+    message += " [" + std::string(slash != nullptr ? slash + 1 : file_) + ":" + std::to_string(line_) + "]";
+#endif
     throw Error(message);
   }
 
  private:
   std::ostringstream stream_;
   std::string condition_;
+  const char* file_;
+  int line_;
 };
 struct ErrorThrower {
   [[noreturn]] void operator&(const ErrorBuilder& builder) const { builder.Throw(); }

@@ -39,6 +39,14 @@ std::vector<Eigen::Vector3f> Mesh::TriangleNormals() const {
   return normals;
 }
 
+Mesh MakeGroundMesh(double y, double x0, double x1, double z0, double z1) {
+  Mesh ground;
+  ground.vertices = {Eigen::Vector3f(x0, y, z0), Eigen::Vector3f(x1, y, z0), Eigen::Vector3f(x1, y, z1),
+                     Eigen::Vector3f(x0, y, z1)};
+  ground.triangles = {Eigen::Vector3i(0, 2, 1), Eigen::Vector3i(0, 3, 2)};
+  return ground;
+}
+
 Mesh MakeBoxMesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
   Mesh mesh;
   for (int k = 0; k < 8; ++k) {

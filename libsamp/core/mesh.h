@@ -39,6 +39,9 @@ struct Mesh {
 
 // Axis-aligned box as a closed 12-triangle mesh with outward-facing triangles.
 Mesh MakeBoxMesh(const Eigen::Vector3d& min_corner, const Eigen::Vector3d& max_corner);
+// The rectangle [x0, x1] x [z0, z1] of the plane at height y as two triangles
+// facing -y (up in the camera frame: a ground under a camera looking along z).
+Mesh MakeGroundMesh(double y, double x0, double x1, double z0, double z1);
 // Closed UV sphere (outward-facing), `rings` >= 3 latitude bands, `segments` >= 3.
 Mesh MakeSphereMesh(const Eigen::Vector3d& center, double radius, int rings = 32, int segments = 64);
 

@@ -1,5 +1,6 @@
 // Small helpers shared by several layers (one copy each): the median of a
-// sample, ASCII lower case, the SplitMix64 mixing function. Pure functions.
+// sample, ASCII lower case, fixed-point text of a number, the SplitMix64
+// mixing function. Pure functions.
 #pragma once
 
 #include <cstdint>
@@ -14,6 +15,9 @@ double Median(std::vector<double> values);
 
 // ASCII lower case of `s`.
 std::string Lower(std::string s);
+
+// `value` with `digits` digits after the point ("%.*f", C locale).
+std::string Fixed(double value, int digits);
 
 // SplitMix64 (Steele, Lea, Flood 2014): a bijective 64-bit mix, the seed
 // derivation of every seeded component. Inline: the procedural textures call

@@ -10,7 +10,7 @@
 
 namespace samp {
 
-bool ObservationOptions::Check() const {
+void ObservationOptions::Check() const {
   SAMP_CHECK(box_margin >= 0 && box_margin <= 2)
       << "ObservationOptions.box_margin = " << box_margin << " must be in [0, 2]";
   SAMP_CHECK(std::isfinite(min_height_above_road))
@@ -22,7 +22,6 @@ bool ObservationOptions::Check() const {
   SAMP_CHECK(min_disparity_px > 0) << "ObservationOptions.min_disparity_px must be > 0";
   SAMP_CHECK(sigma_disparity_px > 0) << "ObservationOptions.sigma_disparity_px must be > 0";
   SAMP_CHECK(max_points_per_frame >= 0) << "ObservationOptions.max_points_per_frame must be >= 0";
-  return true;
 }
 
 Eigen::Vector4d TransformPlane(const Eigen::Vector4d& plane_in_a, const Eigen::Isometry3d& b_from_a) {

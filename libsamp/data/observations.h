@@ -37,7 +37,7 @@ struct ObservationOptions {
   // Seed of the subsampling; combined with the track id and frame number.
   std::uint64_t seed = 0;
 
-  bool Check() const;
+  void Check() const;  // throws samp::Error naming the field
 };
 
 // Fills frame->candidate_points_in_world, candidate_sigmas and candidate_depths

@@ -32,7 +32,7 @@ Eigen::Vector4d FitPlaneLeastSquares(const std::vector<Eigen::Vector3d>& points,
 
 }  // namespace
 
-bool RoadPlaneOptions::Check() const {
+void RoadPlaneOptions::Check() const {
   SAMP_CHECK(iterations > 0) << "RoadPlaneOptions.iterations = " << iterations << " must be > 0";
   SAMP_CHECK(inlier_threshold > 0) << "RoadPlaneOptions.inlier_threshold must be > 0";
   SAMP_CHECK(max_depth > 0) << "RoadPlaneOptions.max_depth must be > 0";
@@ -41,7 +41,6 @@ bool RoadPlaneOptions::Check() const {
       << "RoadPlaneOptions.min_camera_height must be below max_camera_height";
   SAMP_CHECK(max_points >= 3) << "RoadPlaneOptions.max_points must be >= 3";
   SAMP_CHECK(min_inliers >= 3) << "RoadPlaneOptions.min_inliers must be >= 3";
-  return true;
 }
 
 std::string RoadPlaneSummary::BriefReport() const {

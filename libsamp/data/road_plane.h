@@ -30,7 +30,7 @@ struct RoadPlaneOptions {
   int min_inliers = 200;
   std::uint64_t seed = 0;
 
-  bool Check() const;
+  void Check() const;  // throws samp::Error naming the field
 };
 
 struct RoadPlaneSummary {

@@ -48,7 +48,7 @@ bool FrameInRange(int frame, const SequenceOptions& options) {
 
 }  // namespace
 
-bool SequenceOptions::Check() const {
+void SequenceOptions::Check() const {
   stereo.Check();
   road_plane.Check();
   observations.Check();
@@ -56,7 +56,6 @@ bool SequenceOptions::Check() const {
   SAMP_CHECK(!object_types.empty()) << "SequenceOptions.object_types must not be empty";
   SAMP_CHECK(last_frame < 0 || first_frame < 0 || first_frame <= last_frame)
       << "SequenceOptions.first_frame = " << first_frame << " is after last_frame = " << last_frame;
-  return true;
 }
 
 SequenceFiles ListSequence(const std::string& directory) {

@@ -38,7 +38,7 @@ struct SequenceOptions {
   int first_frame = -1;
   int last_frame = -1;
 
-  bool Check() const;
+  void Check() const;  // throws samp::Error naming the field
 };
 
 // Paths of one frame; empty when the file does not exist.

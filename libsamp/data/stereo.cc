@@ -19,7 +19,7 @@ int SgbmMode(const std::string& mode) {
 
 }  // namespace
 
-bool StereoOptions::Check() const {
+void StereoOptions::Check() const {
   SAMP_CHECK(num_disparities > 0 && num_disparities % 16 == 0)
       << "StereoOptions.num_disparities = " << num_disparities << " must be a positive multiple of 16";
   SAMP_CHECK(block_size >= 1 && block_size <= 11 && block_size % 2 == 1)
@@ -32,7 +32,6 @@ bool StereoOptions::Check() const {
   SAMP_CHECK(speckle_range >= 0) << "StereoOptions.speckle_range must be >= 0";
   SAMP_CHECK(pre_filter_cap > 0) << "StereoOptions.pre_filter_cap must be > 0";
   SgbmMode(mode);
-  return true;
 }
 
 cv::Mat ComputeDisparity(const cv::Mat& left, const cv::Mat& right, const StereoOptions& options) {

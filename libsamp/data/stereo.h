@@ -40,7 +40,7 @@ struct StereoOptions {
   // "sgbm" (5 directions), "hh" (full 8 directions, more memory), "3way" (fast), "hh4".
   std::string mode = "sgbm";
 
-  bool Check() const;  // throws samp::Error naming the field
+  void Check() const;  // throws samp::Error naming the field
 };
 
 // Computes the disparity of the left image from a rectified pair (8-bit, 1 or 3

@@ -541,7 +541,7 @@ void FinishSummary(const std::vector<LinkedTrack>& tracks, int warn_median_lengt
 
 }  // namespace
 
-bool TrackerOptions::Check() const {
+void TrackerOptions::Check() const {
   SAMP_CHECK(along_sigma_a > 0 && along_sigma_b >= 0 && along_sigma_c >= 0)
       << "TrackerOptions: along_sigma_a must be > 0, along_sigma_b and along_sigma_c >= 0";
   SAMP_CHECK(across_sigma_a > 0 && across_sigma_b >= 0)
@@ -566,7 +566,6 @@ bool TrackerOptions::Check() const {
   SAMP_CHECK(min_track_length >= 1) << "TrackerOptions.min_track_length must be >= 1";
   SAMP_CHECK(frame_rate_hz > 0) << "TrackerOptions.frame_rate_hz must be > 0";
   SAMP_CHECK(warn_median_length >= 0) << "TrackerOptions.warn_median_length must be >= 0";
-  return true;
 }
 
 void OptionFields(OptionsJson& io, TrackerOptions& o) {

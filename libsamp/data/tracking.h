@@ -84,7 +84,7 @@ struct TrackerOptions {
   // The summary warns when a sequence's median track is shorter (frames).
   int warn_median_length = 5;
 
-  bool Check() const;
+  void Check() const;  // throws samp::Error naming the field
   // Every field as a JSON object (for config.json; OptionFields below).
   std::string ToJson() const;
 };

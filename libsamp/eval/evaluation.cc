@@ -17,11 +17,12 @@
 #include <set>
 #include <sstream>
 
-#include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/progress.h"
+#include "libsamp/core/util.h"
+#include "libsamp/eval/eval_report.h"
 #include "libsamp/eval/metrics.h"
 #include "libsamp/pipeline/fit_output.h"
 #include "libsamp/data/kitti_io.h"
@@ -33,8 +34,6 @@
 #include "libsamp/data/tracking.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/scan/renderer.h"
-#include "libsamp/viz/image.h"
-#include "libsamp/viz/plot.h"
 
 namespace samp {
 namespace {
@@ -43,12 +42,6 @@ namespace fs = std::filesystem;
 
 constexpr char kStereo[] = "stereo";
 constexpr char kDetections[] = "detections";
-
-std::string Fixed(double value, int digits) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, value);
-  return buffer;
-}
 
 Eigen::Isometry3d CameraFromObject(const ObjectLabel& label) {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
@@ -130,43 +123,6 @@ cv::Mat ReadPngOfType(const std::string& path, int type, const cv::Size& size) {
       << "x" << size.height;
   return image;
 }
-
-// The two matchings (docs/evaluation.md): per track, each true car gets one
-// output track for the whole sequence; per frame, each true car at each frame
-// gets the nearest output box of any track within per_frame_distance.
-constexpr int kPerTrack = 0, kPerFrame = 1, kNumMatchings = 2;
-const char* const kMatchingNames[kNumMatchings] = {"per track", "per frame"};
-const char* const kMatchingKeys[kNumMatchings] = {"per_track", "per_frame"};
-
-// One method's view of one ground-truth car-frame under one matching.
-struct MethodRecord {
-  bool matched = false;
-  bool has_shape = false;
-  int output_track = -1;
-  double translation_error = 0.0, yaw_error_deg = 0.0;
-  // Offset of the estimated origin from the true one in the camera: along the
-  // horizontal viewing ray to the true origin (+ = farther), across it (+ =
-  // right), vertically (+ = lower, camera y).
-  double along_ray_offset = 0.0, lateral_offset = 0.0, vertical_offset = 0.0;
-  Eigen::Vector3d size = Eigen::Vector3d::Zero();  // estimated h, w, l
-  int num_estimated_points = 0;
-  std::vector<ShapeScores> scores;  // per tau
-};
-
-struct Record {
-  std::string sequence;
-  int track_id = 0, frame = 0;
-  double distance = 0.0;
-  int segment_pixels = 0;
-  int num_true_points = 0;
-  Eigen::Vector3d true_size = Eigen::Vector3d::Zero();  // h, w, l
-  std::vector<MethodRecord> methods[kNumMatchings];
-};
-
-struct MethodInfo {
-  std::string name, folder;
-  bool shape = false, pose = false;
-};
 
 // Where a result keeps its files for `seq`.
 std::string ResultFolder(const std::string& folder, const std::string& seq) {
@@ -302,8 +258,8 @@ std::vector<Eigen::Vector3d> RenderedPoints(const Mesh& mesh, const Eigen::Isome
   return points;
 }
 
-std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::string& directory,
-                                     const std::vector<MethodInfo>& methods,
+std::vector<CarFrameRecord> EvaluateSequence(const EvalOptions& options, const std::string& directory,
+                                     const std::vector<EvalMethod>& methods,
                                      std::vector<std::unique_ptr<ResultMeshes>>* result_meshes,
                                      std::set<std::string>* tracks, std::vector<TrackingCounts>* tracking) {
   const SequenceFiles files = ListSequence(directory);
@@ -456,7 +412,7 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
 
   // The evaluated car-frames.
   struct Work {
-    Record record;
+    CarFrameRecord record;
     std::vector<cv::Point> pixels;
     std::vector<const ObjectLabel*> matched[kNumMatchings];  // per method
   };
@@ -495,7 +451,7 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
           if (index[k] < 0) continue;
           const ObjectLabel& e = labels[m][frame][index[k]];
           w.matched[k][m] = &e;
-          MethodRecord& r = w.record.methods[k][m];
+          MethodCarFrame& r = w.record.methods[k][m];
           r.matched = true;
           r.output_track = e.track_id;
           r.translation_error = (e.position - truth.position).norm();
@@ -539,7 +495,7 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
     w.record.num_true_points = int(truth.size());
     for (size_t m = 0; m < methods.size(); ++m) {
       for (int k = 0; k < kNumMatchings; ++k) {
-        MethodRecord& r = w.record.methods[k][m];
+        MethodCarFrame& r = w.record.methods[k][m];
         if (!methods[m].shape || !r.matched) continue;
         if (k == kPerFrame && w.matched[kPerTrack][m] == w.matched[kPerFrame][m] &&
             w.record.methods[kPerTrack][m].has_shape) {  // the same box: same scores
@@ -567,7 +523,7 @@ std::vector<Record> EvaluateSequence(const EvalOptions& options, const std::stri
       }
     }
   });
-  std::vector<Record> records;
+  std::vector<CarFrameRecord> records;
   for (Work& w : work) records.push_back(std::move(w.record));
   return records;
 }
@@ -583,77 +539,6 @@ PoseWindow MakeWindow(double lo, double hi, const std::vector<double>& translati
   w.yaw_mean_deg = Mean(yaw);
   w.yaw_median_deg = Median(yaw);
   return w;
-}
-
-std::string WindowName(const PoseWindow& w) {
-  return Fixed(w.min_distance, 0) + "-" + Fixed(w.max_distance, 0) + " m";
-}
-
-// The rows of a pose table: each window, then ">= first window", then "all".
-std::vector<std::pair<std::string, PoseWindow>> PoseRows(const MethodPoseResult& p) {
-  std::vector<std::pair<std::string, PoseWindow>> rows;
-  for (const PoseWindow& w : p.windows) rows.emplace_back(WindowName(w), w);
-  rows.emplace_back(">= " + Fixed(p.beyond_first.min_distance, 0) + " m", p.beyond_first);
-  rows.emplace_back("all", p.all);
-  return rows;
-}
-
-void WritePlots(const EvalOptions& options, const EvalSummary& summary) {
-  const fs::path out(options.output_folder);
-  struct Figure {
-    const char* file;
-    const char* title;
-    const char* y_label;
-    int which;
-  };
-  for (const Figure& fig : {Figure{"f1_vs_tau.png", "F1 score", "F1 [%]", 0},
-                            Figure{"accuracy_vs_tau.png", "Accuracy", "accuracy [%]", 1},
-                            Figure{"completeness_vs_tau.png", "Completeness", "completeness [%]", 2}}) {
-    std::vector<PlotSeries> series;
-    const Marker markers[] = {Marker::kCircle, Marker::kSquare, Marker::kTriangle, Marker::kDiamond};
-    for (size_t m = 0; m < summary.shape.size(); ++m) {
-      const MethodShapeResult& s = summary.shape[m];
-      PlotSeries p;
-      p.label = s.method;
-      p.x = summary.taus;
-      const std::vector<double>& values = fig.which == 0 ? s.f1 : fig.which == 1 ? s.accuracy : s.completeness;
-      for (double v : values) p.y.push_back(100.0 * v);
-      p.marker = markers[m % 4];
-      series.push_back(p);
-    }
-    LinePlotOptions plot;
-    plot.title = std::string(fig.title) + " vs. threshold (" + std::to_string(summary.shape.empty() ? 0 : summary.shape[0].num_evaluated) + " car-frames)";
-    plot.x_label = "tau [m]";
-    plot.y_label = fig.y_label;
-    plot.y_min = 0.0;
-    plot.y_max = 100.0;
-    plot.legend = LegendPosition::kBottomRight;
-    if (!series.empty()) WritePng((out / fig.file).string(), DrawLinePlot(series, plot));
-  }
-  if (summary.pose.empty() || summary.pose[0].windows.empty()) return;
-  std::vector<std::string> categories;
-  for (const PoseWindow& w : summary.pose[0].windows) categories.push_back(WindowName(w));
-  for (int which = 0; which < 2; ++which) {
-    std::vector<BarSeries> series;
-    for (const MethodPoseResult& p : summary.pose) {
-      BarSeries s;
-      s.label = p.method;
-      for (const PoseWindow& w : p.windows) {
-        const double value = which == 0 ? w.translation_median : w.yaw_median_deg;
-        s.values.push_back(w.count > 0 ? value : std::nan(""));
-      }
-      series.push_back(s);
-    }
-    BarPlotOptions plot;
-    plot.title = which == 0 ? "Median translation error" : "Median yaw error";
-    plot.x_label = "distance to the camera";
-    plot.y_label = which == 0 ? "error [m]" : "error [deg]";
-    plot.show_values = true;
-    plot.value_precision = which == 0 ? 2 : 1;
-    plot.legend = LegendPosition::kTopLeft;
-    WritePng((out / (which == 0 ? "translation_vs_distance.png" : "yaw_vs_distance.png")).string(),
-             DrawBarPlot(categories, series, plot));
-  }
 }
 
 }  // namespace
@@ -703,14 +588,19 @@ std::string EvalOptions::ToJson() const {
   return DumpJson(j, 2);
 }
 
-std::string EvalSummary::BriefReport() const {
-  std::ostringstream out;
-  out << "eval: " << num_sequences << " sequences, " << num_gt_tracks << " tracks, "
-      << num_gt_car_frames << " car-frames";
+size_t EvalSummary::HeadlineIndex() const {
   size_t headline = 0;
   for (size_t i = 0; i < taus.size(); ++i) {
     if (std::abs(taus[i] - headline_tau) < 1e-9) headline = i;
   }
+  return headline;
+}
+
+std::string EvalSummary::BriefReport() const {
+  std::ostringstream out;
+  out << "eval: " << num_sequences << " sequences, " << num_gt_tracks << " tracks, "
+      << num_gt_car_frames << " car-frames";
+  const size_t headline = HeadlineIndex();
   for (const MethodShapeResult& s : shape) {
     if (s.f1.empty()) continue;
     out << "; " << s.method << " F1@" << Fixed(headline_tau, 2) << " " << Fixed(100.0 * s.f1[headline], 2) << "%";
@@ -731,10 +621,10 @@ std::string EvalSummary::BriefReport() const {
   return out.str();
 }
 
-EvalSummary Evaluate(const EvalOptions& options) {
+EvalResults ComputeEvaluation(const EvalOptions& options) {
   options.Check();
-  const auto start = std::chrono::steady_clock::now();
-  std::vector<MethodInfo> methods;
+  EvalResults results;
+  std::vector<EvalMethod>& methods = results.methods;
   if (options.stereo_baseline) methods.push_back({kStereo, "", true, false});
   if (options.detection_baseline) methods.push_back({kDetections, "", false, true});
   // A result without meshes (e.g. `samp fit --link-only`, another tracker's
@@ -761,7 +651,7 @@ EvalSummary Evaluate(const EvalOptions& options) {
   }
   for (const auto& [name, folder] : options.results) methods.push_back({name, folder, has_meshes(folder), true});
 
-  std::vector<Record> records;
+  std::vector<CarFrameRecord>& records = results.records;
   std::set<std::string> tracks;
   std::vector<TrackingCounts> tracking(methods.size());
   Progress progress("eval sequences", int64_t(options.sequences.size()));
@@ -776,32 +666,30 @@ EvalSummary Evaluate(const EvalOptions& options) {
         const std::string folder = ResultFolder(methods[m].folder, ListSequence(sequence).name);
         if (!folder.empty()) result_meshes[m] = std::make_unique<ResultMeshes>(folder);
       }
-      std::vector<Record> r = EvaluateSequence(options, sequence, methods, &result_meshes, &tracks, &tracking);
+      std::vector<CarFrameRecord> r = EvaluateSequence(options, sequence, methods, &result_meshes, &tracks, &tracking);
       records.insert(records.end(), std::make_move_iterator(r.begin()), std::make_move_iterator(r.end()));
       progress.Tick();
     }
   });
   progress.Finish();
 
-  EvalSummary summary;
+  EvalSummary& summary = results.summary;
   summary.taus = options.taus;
   summary.headline_tau = options.headline_tau;
   summary.num_sequences = int(options.sequences.size());
   summary.num_gt_car_frames = int(records.size());
   summary.num_gt_tracks = int(tracks.size());
-  size_t headline = 0;
-  for (size_t i = 0; i < options.taus.size(); ++i) {
-    if (std::abs(options.taus[i] - options.headline_tau) < 1e-9) headline = i;
-  }
+  const size_t headline = summary.HeadlineIndex();
 
   double max_distance = 0.0;
-  for (const Record& r : records) max_distance = std::max(max_distance, r.distance);
+  for (const CarFrameRecord& r : records) max_distance = std::max(max_distance, r.distance);
   const int num_windows = std::max(1, int(std::ceil(max_distance / options.distance_window)));
+  results.num_windows = num_windows;
   for (int k = 0; k < kNumMatchings; ++k) {
     std::vector<MethodShapeResult>& shape_results = k == kPerTrack ? summary.shape : summary.shape_per_frame;
     std::vector<MethodPoseResult>& pose_results = k == kPerTrack ? summary.pose : summary.pose_per_frame;
     // Shape over the common set.
-    auto in_common = [&](const Record& r, bool shape) {
+    auto in_common = [&](const CarFrameRecord& r, bool shape) {
       for (size_t m = 0; m < methods.size(); ++m) {
         if ((shape ? methods[m].shape : methods[m].pose) && !r.methods[k][m].matched) return false;
       }
@@ -814,7 +702,7 @@ EvalSummary Evaluate(const EvalOptions& options) {
       s.accuracy.assign(options.taus.size(), 0.0);
       s.completeness.assign(options.taus.size(), 0.0);
       s.f1.assign(options.taus.size(), 0.0);
-      for (const Record& r : records) {
+      for (const CarFrameRecord& r : records) {
         if (r.methods[k][m].matched) ++s.num_matched;
         if (!in_common(r, true)) continue;
         ++s.num_evaluated;
@@ -837,8 +725,8 @@ EvalSummary Evaluate(const EvalOptions& options) {
       p.method = methods[m].name;
       std::vector<std::vector<double>> translation(num_windows), yaw(num_windows);
       std::vector<double> all_translation, all_yaw, far_translation, far_yaw;
-      for (const Record& r : records) {
-        const MethodRecord& mr = r.methods[k][m];
+      for (const CarFrameRecord& r : records) {
+        const MethodCarFrame& mr = r.methods[k][m];
         if (mr.matched) ++p.num_matched;
         if (!in_common(r, false)) continue;
         const int w = std::min(num_windows - 1, int(r.distance / options.distance_window));
@@ -875,8 +763,8 @@ EvalSummary Evaluate(const EvalOptions& options) {
       band.min_distance = w < num_windows ? w * options.distance_window : 0.0;
       band.max_distance = w < num_windows ? (w + 1) * options.distance_window : num_windows * options.distance_window;
       std::vector<double> along, lateral, vertical, dh, dw, dl, f1;
-      for (const Record& r : records) {
-        const MethodRecord& mr = r.methods[kPerFrame][m];
+      for (const CarFrameRecord& r : records) {
+        const MethodCarFrame& mr = r.methods[kPerFrame][m];
         if (!mr.matched) continue;
         if (w < num_windows && std::min(num_windows - 1, int(r.distance / options.distance_window)) != w) continue;
         along.push_back(mr.along_ray_offset);
@@ -897,238 +785,16 @@ EvalSummary Evaluate(const EvalOptions& options) {
       summary.diagnostics.push_back(band);
     }
   }
+  return results;
+}
 
-  // Tables.
-  std::ostringstream md;
-  const std::string tau = Fixed(options.headline_tau, 2);
-  for (int k = 0; k < kNumMatchings; ++k) {
-    const std::vector<MethodShapeResult>& shape_results = k == kPerTrack ? summary.shape : summary.shape_per_frame;
-    const std::vector<MethodPoseResult>& pose_results = k == kPerTrack ? summary.pose : summary.pose_per_frame;
-    const std::string matching = std::string(" (") + kMatchingNames[k] + " matching)";
-    md << "### Shape at tau = " << tau << " m" << matching << "\n\n";
-    const int common_shape = shape_results.empty() ? 0 : shape_results[0].num_evaluated;
-    md << common_shape << " car-frames matched by every method (of " << records.size()
-       << " with >= " << options.min_segment_pixels << " visible pixels, " << tracks.size()
-       << " tracks, " << options.sequences.size() << " sequences).";
-    md << (k == kPerTrack ? " Each true car is matched to one output track (the one sharing most IoU-matched "
-                            "frames with it): a fragmented or swapped track costs.\n\n"
-                          : " Each true car-frame is matched to the nearest box of any track within " +
-                                Fixed(options.per_frame_distance, 1) + " m: abstracts from tracking errors.\n\n");
-    md << "| Method | Accuracy [%] | Completeness [%] | F1 [%] | Matched car-frames |\n";
-    md << "|---|---:|---:|---:|---:|\n";
-    for (const MethodShapeResult& s : shape_results) {
-      md << "| " << s.method << " | " << Fixed(100 * s.accuracy[headline], 2) << " | "
-         << Fixed(100 * s.completeness[headline], 2) << " | " << Fixed(100 * s.f1[headline], 2) << " | "
-         << s.num_matched << " / " << records.size() << " |\n";
-    }
-    md << "\n### F1 [%] over tau" << matching << "\n\n| Method |";
-    for (double t : options.taus) md << " " << Fixed(t, 2) << " |";
-    md << "\n|---|";
-    for (size_t i = 0; i < options.taus.size(); ++i) md << "---:|";
-    md << "\n";
-    for (const MethodShapeResult& s : shape_results) {
-      md << "| " << s.method << " |";
-      for (double v : s.f1) md << " " << Fixed(100 * v, 2) << " |";
-      md << "\n";
-    }
-    md << "\n### Pose" << matching << "\n\n";
-    const int common_pose = pose_results.empty() ? 0 : pose_results[0].all.count;
-    md << common_pose << " car-frames matched by every method. Translation error of the object "
-       << "origin (m), absolute yaw error (deg, 180-degree flips count fully).\n\n";
-    md << "| Method | Distance | n | Transl. mean | Transl. median | Yaw mean | Yaw median |\n";
-    md << "|---|---|---:|---:|---:|---:|---:|\n";
-    for (const MethodPoseResult& p : pose_results) {
-      for (const auto& [name, w] : PoseRows(p)) {
-        md << "| " << p.method << " | " << name
-           << " | " << w.count << " | " << Fixed(w.translation_mean, 3) << " | "
-           << Fixed(w.translation_median, 3) << " | " << Fixed(w.yaw_mean_deg, 2) << " | "
-           << Fixed(w.yaw_median_deg, 2) << " |\n";
-      }
-    }
-    md << "\n";
-  }
-  if (!summary.tracking.empty()) {
-    md << "### Tracking (CLEAR-MOT, per-frame matching within " << Fixed(options.per_frame_distance, 1)
-       << " m)\n\n";
-    md << "| Method | True cars | Output tracks | Tracks per car | Main track [%] | IDSW | FRAG | Missed cars "
-          "| False tracks | FN | FP | MOTA [%] | MOTP [m] |\n";
-    md << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (const MethodTrackingResult& t : summary.tracking) {
-      const TrackingCounts& c = t.counts;
-      md << "| " << t.method << " | " << c.true_cars << " | " << c.output_tracks << " | "
-         << Fixed(c.TracksPerCar(), 2) << " | " << Fixed(100 * c.MainTrackShare(), 1) << " | " << c.id_switches
-         << " | " << c.fragmentations << " | " << c.missed_cars << " | " << c.false_tracks << " | " << c.misses
-         << " | " << c.false_positives << " | " << Fixed(100 * c.Mota(), 1) << " | " << Fixed(c.Motp(), 3)
-         << " |\n";
-    }
-    md << "\n";
-  }
-  md << "### Per-car diagnostics (per-frame matching, medians)\n\n"
-     << "Offset of the estimated origin from the true one along the viewing ray (+ = farther), |across| and "
-        "|vertical|; estimated minus true box size; F1 at tau = "
-     << tau << " m. Every car-frame the method matched (per_car.csv has them all).\n\n";
-  md << "| Method | Distance | n | Along ray [m] | Across [m] | Vertical [m] | dh [m] | dw [m] | dl [m] | F1 [%] |\n";
-  md << "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-  for (const DiagnosticsBand& b : summary.diagnostics) {
-    const bool all = b.min_distance == 0.0 && b.max_distance == num_windows * options.distance_window &&
-                     num_windows > 1;
-    md << "| " << b.method << " | "
-       << (all ? std::string("all") : Fixed(b.min_distance, 0) + "-" + Fixed(b.max_distance, 0) + " m") << " | "
-       << b.count << " | " << Fixed(b.along_ray_offset, 3) << " | " << Fixed(b.abs_lateral_offset, 3) << " | "
-       << Fixed(b.abs_vertical_offset, 3) << " | " << Fixed(b.size_error[0], 3) << " | "
-       << Fixed(b.size_error[1], 3) << " | " << Fixed(b.size_error[2], 3) << " | "
-       << (b.num_shape > 0 ? Fixed(100 * b.f1, 2) : std::string("-")) << " |\n";
-  }
-  summary.markdown = md.str();
-
-  // Files.
-  const fs::path out(options.output_folder);
-  fs::create_directories(out);
-  WriteTextFileAtomically((out / "results.md").string(), summary.markdown);
-  std::ostringstream shape_csv;
-  shape_csv << "method,matching,tau,accuracy,completeness,f1,car_frames\n";
-  for (int k = 0; k < kNumMatchings; ++k) {
-    for (const MethodShapeResult& s : k == kPerTrack ? summary.shape : summary.shape_per_frame) {
-      for (size_t i = 0; i < options.taus.size(); ++i) {
-        shape_csv << s.method << "," << kMatchingKeys[k] << "," << options.taus[i] << "," << Fixed(s.accuracy[i], 6)
-                  << "," << Fixed(s.completeness[i], 6) << "," << Fixed(s.f1[i], 6) << "," << s.num_evaluated
-                  << "\n";
-      }
-    }
-  }
-  WriteTextFileAtomically((out / "shape.csv").string(), shape_csv.str());
-  std::ostringstream pose_csv;
-  pose_csv << "method,matching,window,min_distance,max_distance,count,translation_mean,translation_median,"
-              "yaw_mean_deg,yaw_median_deg\n";
-  for (int k = 0; k < kNumMatchings; ++k) {
-    for (const MethodPoseResult& p : k == kPerTrack ? summary.pose : summary.pose_per_frame) {
-      for (const auto& [name, w] : PoseRows(p)) {
-        pose_csv << p.method << "," << kMatchingKeys[k] << "," << name << "," << w.min_distance << ","
-                 << w.max_distance << "," << w.count << "," << Fixed(w.translation_mean, 6) << ","
-                 << Fixed(w.translation_median, 6) << "," << Fixed(w.yaw_mean_deg, 6) << ","
-                 << Fixed(w.yaw_median_deg, 6) << "\n";
-      }
-    }
-  }
-  WriteTextFileAtomically((out / "pose.csv").string(), pose_csv.str());
-  std::ostringstream object_csv;
-  object_csv << "sequence,track_id,frame,distance,segment_pixels,true_points,method,matching,matched,"
-                "translation_error,yaw_error_deg,estimated_points,accuracy,completeness,f1\n";
-  std::ostringstream car_csv;
-  car_csv << "sequence,track_id,frame,distance,method,matching,output_track,along_ray_offset,lateral_offset,"
-             "vertical_offset,h,w,l,true_h,true_w,true_l,translation_error,yaw_error_deg,f1\n";
-  for (const Record& r : records) {
-    for (int k = 0; k < kNumMatchings; ++k) {
-      for (size_t m = 0; m < methods.size(); ++m) {
-        const MethodRecord& mr = r.methods[k][m];
-        object_csv << r.sequence << "," << r.track_id << "," << r.frame << "," << Fixed(r.distance, 3) << ","
-                   << r.segment_pixels << "," << r.num_true_points << "," << methods[m].name << ","
-                   << kMatchingKeys[k] << "," << (mr.matched ? 1 : 0) << ",";
-        if (mr.matched && methods[m].pose) {
-          object_csv << Fixed(mr.translation_error, 4) << "," << Fixed(mr.yaw_error_deg, 3);
-        } else {
-          object_csv << ",";
-        }
-        object_csv << "," << mr.num_estimated_points << ",";
-        if (mr.has_shape) {
-          const ShapeScores& s = mr.scores[headline];
-          object_csv << Fixed(s.accuracy, 4) << "," << Fixed(s.completeness, 4) << "," << Fixed(s.f1, 4);
-        } else {
-          object_csv << ",,";
-        }
-        object_csv << "\n";
-        if (!mr.matched || !methods[m].pose) continue;
-        car_csv << r.sequence << "," << r.track_id << "," << r.frame << "," << Fixed(r.distance, 3) << ","
-                << methods[m].name << "," << kMatchingKeys[k] << "," << mr.output_track << ","
-                << Fixed(mr.along_ray_offset, 4) << "," << Fixed(mr.lateral_offset, 4) << ","
-                << Fixed(mr.vertical_offset, 4) << "," << Fixed(mr.size[0], 3) << "," << Fixed(mr.size[1], 3) << ","
-                << Fixed(mr.size[2], 3) << "," << Fixed(r.true_size[0], 3) << "," << Fixed(r.true_size[1], 3) << ","
-                << Fixed(r.true_size[2], 3) << "," << Fixed(mr.translation_error, 4) << ","
-                << Fixed(mr.yaw_error_deg, 3) << "," << (mr.has_shape ? Fixed(mr.scores[headline].f1, 4) : "")
-                << "\n";
-      }
-    }
-  }
-  WriteTextFileAtomically((out / "per_object.csv").string(), object_csv.str());
-  WriteTextFileAtomically((out / "per_car.csv").string(), car_csv.str());
-  std::ostringstream tracking_csv;
-  tracking_csv << "method,true_cars,true_boxes,output_tracks,output_boxes,matches,tracks_per_car,main_track_share,"
-                  "id_switches,fragmentations,missed_cars,false_tracks,misses,false_positives,mota,motp\n";
-  for (const MethodTrackingResult& t : summary.tracking) {
-    const TrackingCounts& c = t.counts;
-    tracking_csv << t.method << "," << c.true_cars << "," << c.true_boxes << "," << c.output_tracks << ","
-                 << c.output_boxes << "," << c.matches << "," << Fixed(c.TracksPerCar(), 4) << ","
-                 << Fixed(c.MainTrackShare(), 4) << "," << c.id_switches << "," << c.fragmentations << ","
-                 << c.missed_cars << "," << c.false_tracks << "," << c.misses << "," << c.false_positives << ","
-                 << Fixed(c.Mota(), 4) << "," << Fixed(c.Motp(), 4) << "\n";
-  }
-  WriteTextFileAtomically((out / "tracking.csv").string(), tracking_csv.str());
-
-  nlohmann::json j;
-  j["options"] = nlohmann::json::parse(options.ToJson());
-  j["num_car_frames"] = records.size();
-  j["num_tracks"] = tracks.size();
-  for (int k = 0; k < kNumMatchings; ++k) {
-    const std::string suffix = k == kPerTrack ? "" : "_per_frame";
-    for (const MethodShapeResult& s : k == kPerTrack ? summary.shape : summary.shape_per_frame) {
-      j["shape" + suffix].push_back({{"method", s.method},
-                                     {"taus", options.taus},
-                                     {"accuracy", s.accuracy},
-                                     {"completeness", s.completeness},
-                                     {"f1", s.f1},
-                                     {"car_frames", s.num_evaluated},
-                                     {"matched", s.num_matched}});
-    }
-    for (const MethodPoseResult& p : k == kPerTrack ? summary.pose : summary.pose_per_frame) {
-      nlohmann::json windows = nlohmann::json::array();
-      for (const auto& [name, w] : PoseRows(p)) {
-        windows.push_back({{"window", name},
-                           {"min_distance", w.min_distance},
-                           {"max_distance", w.max_distance},
-                           {"count", w.count},
-                           {"translation_mean", w.translation_mean},
-                           {"translation_median", w.translation_median},
-                           {"yaw_mean_deg", w.yaw_mean_deg},
-                           {"yaw_median_deg", w.yaw_median_deg}});
-      }
-      j["pose" + suffix].push_back({{"method", p.method}, {"windows", windows}, {"matched", p.num_matched}});
-    }
-  }
-  for (const MethodTrackingResult& t : summary.tracking) {
-    const TrackingCounts& c = t.counts;
-    j["tracking"].push_back({{"method", t.method},
-                             {"true_cars", c.true_cars},
-                             {"true_boxes", c.true_boxes},
-                             {"output_tracks", c.output_tracks},
-                             {"output_boxes", c.output_boxes},
-                             {"matches", c.matches},
-                             {"tracks_per_car", c.TracksPerCar()},
-                             {"main_track_share", c.MainTrackShare()},
-                             {"id_switches", c.id_switches},
-                             {"fragmentations", c.fragmentations},
-                             {"missed_cars", c.missed_cars},
-                             {"false_tracks", c.false_tracks},
-                             {"misses", c.misses},
-                             {"false_positives", c.false_positives},
-                             {"mota", c.Mota()},
-                             {"motp", c.Motp()}});
-  }
-  for (const DiagnosticsBand& b : summary.diagnostics) {
-    j["diagnostics"].push_back({{"method", b.method},
-                                {"min_distance", b.min_distance},
-                                {"max_distance", b.max_distance},
-                                {"count", b.count},
-                                {"along_ray_offset_median", b.along_ray_offset},
-                                {"abs_lateral_offset_median", b.abs_lateral_offset},
-                                {"abs_vertical_offset_median", b.abs_vertical_offset},
-                                {"size_error_median", {b.size_error[0], b.size_error[1], b.size_error[2]}},
-                                {"f1_median", b.f1},
-                                {"shape_count", b.num_shape}});
-  }
-  WriteTextFileAtomically((out / "results.json").string(), DumpJson(j, 2) + "\n");
-  WritePlots(options, summary);
-  summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return summary;
+EvalSummary Evaluate(const EvalOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  EvalResults results = ComputeEvaluation(options);
+  results.summary.markdown = EvalMarkdown(options, results);
+  WriteEvalReport(options, results);
+  results.summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return results.summary;
 }
 
 }  // namespace samp

@@ -120,10 +120,63 @@ struct EvalSummary {
   std::vector<DiagnosticsBand> diagnostics;
   std::string markdown;        // the tables (also written to results.md)
   double seconds = 0.0;
+  // The index of headline_tau in taus.
+  size_t HeadlineIndex() const;
   std::string BriefReport() const;
 };
 
-// Evaluates and writes OUT/results.md, results.json, shape.csv, pose.csv,
+// The two matchings (docs/evaluation.md): per track, each true car gets one
+// output track for the whole sequence; per frame, each true car at each frame
+// gets the nearest output box of any track within per_frame_distance.
+constexpr int kPerTrack = 0, kPerFrame = 1, kNumMatchings = 2;
+
+// One method's view of one ground-truth car-frame under one matching.
+struct MethodCarFrame {
+  bool matched = false;
+  bool has_shape = false;
+  int output_track = -1;
+  double translation_error = 0.0, yaw_error_deg = 0.0;
+  // Offset of the estimated origin from the true one in the camera: along the
+  // horizontal viewing ray to the true origin (+ = farther), across it (+ =
+  // right), vertically (+ = lower, camera y).
+  double along_ray_offset = 0.0, lateral_offset = 0.0, vertical_offset = 0.0;
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();  // estimated h, w, l
+  int num_estimated_points = 0;
+  std::vector<ShapeScores> scores;  // per tau
+};
+
+// One ground-truth car-frame with a large enough segment, and every method's
+// view of it under each matching (methods[k][m]: matching k, method m).
+struct CarFrameRecord {
+  std::string sequence;
+  int track_id = 0, frame = 0;
+  double distance = 0.0;
+  int segment_pixels = 0;
+  int num_true_points = 0;
+  Eigen::Vector3d true_size = Eigen::Vector3d::Zero();  // h, w, l
+  std::vector<MethodCarFrame> methods[kNumMatchings];
+};
+
+// A compared method: a baseline ("stereo", "detections") or a result folder.
+struct EvalMethod {
+  std::string name, folder;
+  bool shape = false, pose = false;  // evaluated for shape (has surfaces), for pose
+};
+
+// What an evaluation computes, before anything is written: the summary (its
+// markdown and seconds not yet set) and the car-frame records it aggregates.
+struct EvalResults {
+  EvalSummary summary;
+  std::vector<EvalMethod> methods;      // the baselines, then the results in the given order
+  std::vector<CarFrameRecord> records;  // every evaluated car-frame, sequence by sequence
+  int num_windows = 1;                  // distance windows of the pose statistics
+};
+
+// Reads the sequences and results and aggregates the scores; writes nothing.
+// Throws samp::Error naming the file on missing or malformed input.
+EvalResults ComputeEvaluation(const EvalOptions& options);
+
+// ComputeEvaluation, then the tables and plots (eval/eval_report.h): writes OUT/results.md, results.json, shape.csv, pose.csv,
 // per_object.csv, tracking.csv, per_car.csv and the plots f1_vs_tau.png, accuracy_vs_tau.png,
 // completeness_vs_tau.png, translation_vs_distance.png, yaw_vs_distance.png.
 // Throws samp::Error naming the file on missing or malformed input.

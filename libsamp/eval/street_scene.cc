@@ -25,15 +25,6 @@ Mesh Box(double x0, double x1, double y0, double y1, double z0, double z1) {
                      Eigen::Vector3d(std::max(x0, x1), std::max(y0, y1), std::max(z0, z1)));
 }
 
-Mesh Ground(double y) {
-  Mesh ground;
-  const double x0 = -120, x1 = 120, z0 = -80, z1 = 260;
-  ground.vertices = {Eigen::Vector3f(x0, y, z0), Eigen::Vector3f(x1, y, z0), Eigen::Vector3f(x1, y, z1),
-                     Eigen::Vector3f(x0, y, z1)};
-  ground.triangles = {Eigen::Vector3i(0, 2, 1), Eigen::Vector3i(0, 3, 2)};
-  return ground;
-}
-
 double DistanceToGrid(double x, double period) {
   const double r = x - period * std::floor(x / period);
   return std::min(r, period - r);
@@ -178,7 +169,7 @@ std::vector<StreetObject> MakeStreetObjects(const StreetOptions& options, Street
     o.seed = Mix(seed, uint64_t(1000 + next_seed++));
     objects.push_back(std::move(o));
   };
-  add(Ground(y), StreetMaterial::kAsphalt, Eigen::Vector3d::Constant(0.25));
+  add(MakeGroundMesh(y, -120, 120, -80, 260), StreetMaterial::kAsphalt, Eigen::Vector3d::Constant(0.25));
   // z segments of the sidewalks, building rows and clutter (interrupted by the cross street).
   std::vector<std::pair<double, double>> segments;
   if (layout->has_intersection) {

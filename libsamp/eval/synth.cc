@@ -232,15 +232,6 @@ void AddBuildings(const SynthOptions& options, Random* rng, uint64_t seed, Scene
   }
 }
 
-Mesh MakeGroundMesh(double y) {
-  Mesh ground;
-  const double x0 = -80, x1 = 80, z0 = -60, z1 = 220;
-  ground.vertices = {Eigen::Vector3f(x0, y, z0), Eigen::Vector3f(x1, y, z0), Eigen::Vector3f(x1, y, z1),
-                     Eigen::Vector3f(x0, y, z1)};
-  ground.triangles = {Eigen::Vector3i(0, 2, 1), Eigen::Vector3i(0, 3, 2)};
-  return ground;
-}
-
 struct Paint {
   const char* name;
   Eigen::Vector3d color;
@@ -295,6 +286,20 @@ bool AcceptTrajectory(const SynthOptions& options, const Scene& scene, const Pla
   return true;
 }
 
+// Gives `car` the trajectory through `middle_state` (the car at distance `d`
+// from the middle frame's camera) when AcceptTrajectory admits it.
+bool TakeTrajectory(const SynthOptions& options, const Scene& scene, MotionType motion, double d,
+                    const PlanarState& middle_state, double speed, double yaw_rate, SceneCar* car) {
+  std::vector<PlanarState> states;
+  if (!AcceptTrajectory(options, scene, middle_state, speed, yaw_rate, *car, &states)) return false;
+  car->motion = motion;
+  car->speed = speed;
+  car->yaw_rate = yaw_rate;
+  car->target_distance = d;
+  car->states = std::move(states);
+  return true;
+}
+
 // Tries to place one car; returns false when no admissible trajectory was found.
 bool PlaceCar(const SynthOptions& options, MotionType motion, double min_d, double max_d,
               const Scene& scene, Random* rng, SceneCar* car) {
@@ -338,14 +343,7 @@ bool PlaceCar(const SynthOptions& options, MotionType motion, double min_d, doub
         break;
     }
     middle_state.heading = WrapAngle(middle_state.heading);
-    std::vector<PlanarState> states;
-    if (!AcceptTrajectory(options, scene, middle_state, speed, yaw_rate, *car, &states)) continue;
-    car->motion = motion;
-    car->speed = speed;
-    car->yaw_rate = yaw_rate;
-    car->target_distance = d;
-    car->states = std::move(states);
-    return true;
+    if (TakeTrajectory(options, scene, motion, d, middle_state, speed, yaw_rate, car)) return true;
   }
   return false;
 }
@@ -366,7 +364,7 @@ Scene MakeCleanScene(const SynthOptions& options, const std::vector<SynthCar>& c
     scene.world_from_camera.push_back(samp::WorldFromObject(s.position, s.heading + 0.5 * kPi));
   }
   StaticMesh road;
-  road.mesh = MakeGroundMesh(options.camera_height);
+  road.mesh = MakeGroundMesh(options.camera_height, -80, 80, -60, 220);
   road.material = MaterialKind::kRoad;
   road.seed = Mix(seed, 1);
   scene.statics.push_back(std::move(road));
@@ -489,14 +487,7 @@ bool PlaceStreetCar(const SynthOptions& options, MotionType motion, double min_d
     PlanarState middle_state;
     double speed = 0.0, yaw_rate = 0.0;
     if (!ProposeStreetState(options, scene, motion, d, rng, &middle_state, &speed, &yaw_rate)) continue;
-    std::vector<PlanarState> states;
-    if (!AcceptTrajectory(options, scene, middle_state, speed, yaw_rate, *car, &states)) continue;
-    car->motion = motion;
-    car->speed = speed;
-    car->yaw_rate = yaw_rate;
-    car->target_distance = d;
-    car->states = std::move(states);
-    return true;
+    if (TakeTrajectory(options, scene, motion, d, middle_state, speed, yaw_rate, car)) return true;
   }
   return false;
 }
@@ -1196,24 +1187,23 @@ std::vector<SynthCar> LoadSynthCars(const SynthCarSource& source) {
                                                     << " does not exist";
     Manifest manifest;
     if (!source.manifest_path.empty()) manifest = LoadManifest(source.manifest_path);
-    // Symlinked folders are followed, each folder walked once (no copies from a loop).
-    std::vector<fs::path> files;
-    for (const std::string& path : ListMeshFiles(source.cad_folder)) files.push_back(path);
-    std::sort(files.begin(), files.end());  // the order of fs::path, as before
-    for (const fs::path& file : files) {
-      const std::string relative = file.lexically_relative(source.cad_folder).generic_string();
-      const ManifestEntry* entry = manifest.Find(relative);
-      const std::string name = entry && !entry->name.empty() ? entry->name : file.stem().string();
-      const bool selected = wanted.empty() || wanted.count(Lower(name)) ||
-                            wanted.count(Lower(file.stem().string()));
+    std::vector<CadFile> files = ListCadFiles(source.cad_folder, &manifest);
+    std::sort(files.begin(), files.end(), [](const CadFile& a, const CadFile& b) {
+      return fs::path(a.path) < fs::path(b.path);  // the order of fs::path, as before
+    });
+    for (const CadFile& file : files) {
+      const std::string& relative = file.relative_path;
+      const ManifestEntry* entry = file.entry;
+      const std::string& name = file.name;
+      const std::string stem = fs::path(file.path).stem().string();
+      const bool selected = wanted.empty() || wanted.count(Lower(name)) || wanted.count(Lower(stem));
       if (!selected) continue;
       if (entry && entry->skip && !(source.ignore_skip_for_only && !wanted.empty())) {
         LogDebug() << "synth: skipping " << relative << " (manifest: " << entry->skip_reason << ")";
         continue;
       }
-      const CanonicalizeOptions& canonicalize = entry ? entry->canonicalize : manifest.defaults;
-      const Mesh cad_mesh = LoadMesh(file.string());
-      const CanonicalizeResult result = Canonicalize(cad_mesh, canonicalize);
+      const Mesh cad_mesh = LoadMesh(file.path);
+      const CanonicalizeResult result = Canonicalize(cad_mesh, file.canonicalize);
       for (const std::string& warning : result.warnings) {
         LogWarning() << "synth: " << relative << ": " << warning;
       }
@@ -1221,7 +1211,7 @@ std::vector<SynthCar> LoadSynthCars(const SynthCarSource& source) {
       cars.push_back({name, result.mesh, result.wheels_added ? int(cad_mesh.triangles.size()) : -1});
       if (result.wheels_added) LogDebug() << "synth: " << name << ": " << result.wheels.BriefReport();
       found.insert(Lower(name));
-      found.insert(Lower(file.stem().string()));
+      found.insert(Lower(stem));
     }
   }
   for (const std::string& path : source.canonical_meshes) {

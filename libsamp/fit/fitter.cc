@@ -203,7 +203,7 @@ DataWeighting ParseDataWeighting(const std::string& name) {
   SAMP_THROW() << "unknown data weighting '" << name << "' (mean, effective)";
 }
 
-bool FitOptions::Check() const {
+void FitOptions::Check() const {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   SAMP_CHECK(em_iterations >= 0) << "FitOptions.em_iterations must be >= 0, got " << em_iterations;
   SAMP_CHECK(std::isfinite(em_initial_sigma_scale) && em_initial_sigma_scale >= 1.0)
@@ -249,7 +249,6 @@ bool FitOptions::Check() const {
          "dense_qr, not '"
       << linear_solver << "'";
   SAMP_CHECK(num_threads >= 1) << "FitOptions.num_threads must be >= 1";
-  return true;
 }
 
 std::string FitSummary::BriefReport() const {

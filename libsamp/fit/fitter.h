@@ -126,8 +126,8 @@ struct FitOptions {
   // Keep the associated points in the result (for the aligned-points PLY).
   bool keep_points = true;
 
-  // Throws samp::Error naming the field and rule it broke; returns true otherwise.
-  bool Check() const;
+  // Throws samp::Error naming the field and the rule it broke.
+  void Check() const;
 };
 
 // One Ceres solve.

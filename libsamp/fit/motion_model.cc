@@ -32,7 +32,7 @@ Eigen::Isometry3d ObjectFromWorld(const Eigen::Vector3d& translation, double yaw
   return WorldFromObject(translation, yaw).inverse();
 }
 
-bool MotionNoise::Check() const {
+void MotionNoise::Check() const {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
   SAMP_CHECK(non_negative(speed_noise)) << "MotionNoise.speed_noise must be >= 0";
@@ -42,7 +42,6 @@ bool MotionNoise::Check() const {
   SAMP_CHECK(positive(sigma_yaw)) << "MotionNoise.sigma_yaw must be > 0";
   SAMP_CHECK(positive(sigma_speed)) << "MotionNoise.sigma_speed must be > 0";
   SAMP_CHECK(positive(sigma_yaw_rate)) << "MotionNoise.sigma_yaw_rate must be > 0";
-  return true;
 }
 
 MotionModel SelectMotionModel(double speed, double yaw_rate, double eps_speed, double eps_yaw_rate) {

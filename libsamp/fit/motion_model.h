@@ -52,7 +52,7 @@ struct MotionNoise {
   double sigma_yaw = 0.02;       // rad
   double sigma_speed = 0.2;      // m/s
   double sigma_yaw_rate = 0.05;  // rad/s
-  bool Check() const;
+  void Check() const;  // throws samp::Error naming the field
 };
 
 // Chooses the model from the previous state's velocities.

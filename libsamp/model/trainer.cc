@@ -16,6 +16,7 @@
 #include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/progress.h"
+#include "libsamp/core/util.h"
 #include "libsamp/scan/canonical.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/sdf/vdb_io.h"
@@ -70,36 +71,24 @@ std::vector<Job> FindJobs(const TrainOptions& options, const Manifest* manifest)
   SAMP_CHECK(fs::is_directory(folder, ec))
       << "CAD folder '" << options.cad_folder << "' is not a directory";
   std::vector<Job> jobs;
-  // Symlinked folders are followed, each folder walked once (no copies from a loop).
-  for (const std::string& path : ListMeshFiles(options.cad_folder)) {
+  std::map<const ManifestEntry*, int> matched;
+  for (const CadFile& file : ListCadFiles(options.cad_folder, manifest)) {
     Job job;
-    job.path = path;
-    job.relative_path = fs::path(path).lexically_relative(folder).generic_string();
+    job.path = file.path;
+    job.relative_path = file.relative_path;
+    job.name = file.name;
+    job.canonicalize = file.canonicalize;
+    if (file.entry != nullptr) {
+      ++matched[file.entry];
+      job.skip = file.entry->skip;
+      job.skip_reason = file.entry->skip_reason.empty() ? "no reason given" : file.entry->skip_reason;
+    } else if (!options.preset.empty()) {
+      job.canonicalize = CanonicalPreset(options.preset);
+    }
     jobs.push_back(std::move(job));
   }
-  std::sort(jobs.begin(), jobs.end(),
-            [](const Job& a, const Job& b) { return a.relative_path < b.relative_path; });
   SAMP_CHECK(!jobs.empty()) << "no mesh files (any format assimp reads) in CAD folder '"
                             << options.cad_folder << "'";
-
-  std::map<const ManifestEntry*, int> matched;
-  for (Job& job : jobs) {
-    const ManifestEntry* entry = manifest != nullptr ? manifest->Find(job.relative_path) : nullptr;
-    if (entry != nullptr) {
-      ++matched[entry];
-      job.name = entry->name;
-      job.canonicalize = entry->canonicalize;
-      job.skip = entry->skip;
-      job.skip_reason = entry->skip_reason.empty() ? "no reason given" : entry->skip_reason;
-    } else {
-      job.name = fs::path(job.relative_path).stem().string();
-      if (!options.preset.empty()) {
-        job.canonicalize = CanonicalPreset(options.preset);
-      } else if (manifest != nullptr) {
-        job.canonicalize = manifest->defaults;
-      }
-    }
-  }
   if (manifest != nullptr) {
     for (const ManifestEntry& entry : manifest->entries) {
       if (matched.count(&entry) == 0) {
@@ -137,12 +126,6 @@ void SaveModelSdf(const std::string& path, const Sdf& sdf, const Job& job,
   WriteVdb(path, sdf.grid, {DenseGrid{"sdf", sdf.values}}, meta);
 }
 
-std::string FormatFixed(double value, int digits) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, value);
-  return buffer;
-}
-
 }  // namespace
 
 void TrainOptions::Check() const {
@@ -162,6 +145,49 @@ void TrainOptions::Check() const {
   if (!preset.empty()) CanonicalPreset(preset);  // throws naming the known presets
 }
 
+namespace {
+
+const char* SdfSignName(SdfOptions::Sign sign) {
+  return sign == SdfOptions::Sign::kCarving ? "carving" : "carving_and_closing";
+}
+
+SdfOptions::Sign ParseSdfSign(const std::string& name) {
+  SAMP_CHECK(name == "carving" || name == "carving_and_closing")
+      << "must be \"carving\" or \"carving_and_closing\", got \"" << name << "\"";
+  return name == "carving" ? SdfOptions::Sign::kCarving : SdfOptions::Sign::kCarvingAndClosing;
+}
+
+}  // namespace
+
+// The trainer options in a model file's metadata: the keys of each nested
+// object, listed once for TrainOptions::ToJson and TrainOptionsFromJson.
+static void OptionFields(OptionsJson& io, ScanOptions& o) {
+  io("num_views", o.num_views);
+  io("width", o.width);
+  io("height", o.height);
+  io("fov_deg", o.fov_deg);
+  io("distance_factor", o.distance_factor);
+}
+
+static void OptionFields(OptionsJson& io, SdfOptions& o) {
+  io("truncation", o.truncation);
+  io("carve_margin", o.carve_margin);
+  io("min_inside_fraction", o.min_inside_fraction);
+  io.Named("sign", o.sign, SdfSignName, ParseSdfSign);
+  io("closing_radius_voxels", o.closing_radius_voxels);
+}
+
+static void OptionFields(OptionsJson& io, SdfQualityOptions& o) {
+  io("min_box_fill", o.min_box_fill);
+  io("borderline_box_fill", o.borderline_box_fill);
+  io("min_largest_component", o.min_largest_component);
+  io("borderline_largest_component", o.borderline_largest_component);
+  io("min_closing_agreement", o.min_closing_agreement);
+  io("borderline_closing_agreement", o.borderline_closing_agreement);
+}
+
+static void OptionFields(OptionsJson& io, PcaOptions& o) { io("num_components", o.num_components); }
+
 std::string TrainOptions::ToJson() const {
   nlohmann::json j;
   j["cad_folder"] = cad_folder;
@@ -170,23 +196,10 @@ std::string TrainOptions::ToJson() const {
   j["grid"] = {{"origin", Vector3Json(grid.origin)},
                {"voxel_size", grid.voxel_size},
                {"dims", {grid.dims.x(), grid.dims.y(), grid.dims.z()}}};
-  j["scan"] = {{"num_views", scan.num_views},
-               {"width", scan.width},
-               {"height", scan.height},
-               {"fov_deg", scan.fov_deg},
-               {"distance_factor", scan.distance_factor}};
-  j["sdf"] = {{"truncation", sdf.truncation},
-              {"carve_margin", sdf.carve_margin},
-              {"min_inside_fraction", sdf.min_inside_fraction},
-              {"sign", sdf.sign == SdfOptions::Sign::kCarving ? "carving" : "carving_and_closing"},
-              {"closing_radius_voxels", sdf.closing_radius_voxels}};
-  j["gate"] = {{"min_box_fill", gate.min_box_fill},
-               {"borderline_box_fill", gate.borderline_box_fill},
-               {"min_largest_component", gate.min_largest_component},
-               {"borderline_largest_component", gate.borderline_largest_component},
-               {"min_closing_agreement", gate.min_closing_agreement},
-               {"borderline_closing_agreement", gate.borderline_closing_agreement}};
-  j["pca"] = {{"num_components", pca.num_components}};
+  j["scan"] = OptionsToJson(scan);
+  j["sdf"] = OptionsToJson(sdf);
+  j["gate"] = OptionsToJson(gate);
+  j["pca"] = OptionsToJson(pca);
   nlohmann::json variants = nlohmann::json::array();
   for (const Eigen::Vector3d& f : size_variants) variants.push_back(Vector3Json(f));
   j["size_variants"] = variants;
@@ -208,29 +221,10 @@ TrainOptions TrainOptionsFromJson(const std::string& json, const std::string& so
   o.grid.origin = Eigen::Vector3d(origin[0], origin[1], origin[2]);
   o.grid.dims = Eigen::Vector3i(dims[0], dims[1], dims[2]);
   grid.Read("voxel_size", &o.grid.voxel_size);
-  const JsonFields scan = j.Object("scan");
-  scan.Read("num_views", &o.scan.num_views);
-  scan.Read("width", &o.scan.width);
-  scan.Read("height", &o.scan.height);
-  scan.Read("fov_deg", &o.scan.fov_deg);
-  scan.Read("distance_factor", &o.scan.distance_factor);
-  const JsonFields sdf = j.Object("sdf");
-  sdf.Read("truncation", &o.sdf.truncation);
-  sdf.Read("carve_margin", &o.sdf.carve_margin);
-  sdf.Read("min_inside_fraction", &o.sdf.min_inside_fraction);
-  const std::string sign = sdf.Get<std::string>("sign");
-  SAMP_CHECK(sign == "carving" || sign == "carving_and_closing")
-      << sdf.Where() << ": key 'sign' must be \"carving\" or \"carving_and_closing\", got \"" << sign << "\"";
-  o.sdf.sign = sign == "carving" ? SdfOptions::Sign::kCarving : SdfOptions::Sign::kCarvingAndClosing;
-  sdf.Read("closing_radius_voxels", &o.sdf.closing_radius_voxels);
-  const JsonFields gate = j.Object("gate");
-  gate.Read("min_box_fill", &o.gate.min_box_fill);
-  gate.Read("borderline_box_fill", &o.gate.borderline_box_fill);
-  gate.Read("min_largest_component", &o.gate.min_largest_component);
-  gate.Read("borderline_largest_component", &o.gate.borderline_largest_component);
-  gate.Read("min_closing_agreement", &o.gate.min_closing_agreement);
-  gate.Read("borderline_closing_agreement", &o.gate.borderline_closing_agreement);
-  j.Object("pca").Read("num_components", &o.pca.num_components);
+  OptionsFromJson(j.Object("scan"), &o.scan);
+  OptionsFromJson(j.Object("sdf"), &o.sdf);
+  OptionsFromJson(j.Object("gate"), &o.gate);
+  OptionsFromJson(j.Object("pca"), &o.pca);
   // Model files written before size variants existed have no key: none were used.
   if (j.Has("size_variants")) {
     for (const std::vector<double>& f : j.Get<std::vector<std::vector<double>>>("size_variants")) {
@@ -252,11 +246,11 @@ std::string TrainSummary::BriefReport() const {
   for (const TrainedShape& s : shapes) {
     const std::string size =
         s.size.isZero() ? "-"
-                        : FormatFixed(s.size.x(), 2) + " x " + FormatFixed(s.size.y(), 2) +
-                              " x " + FormatFixed(s.size.z(), 2);
-    const std::string inside = s.inside_fraction > 0 ? FormatFixed(s.inside_fraction, 3) : "-";
+                        : Fixed(s.size.x(), 2) + " x " + Fixed(s.size.y(), 2) +
+                              " x " + Fixed(s.size.z(), 2);
+    const std::string inside = s.inside_fraction > 0 ? Fixed(s.inside_fraction, 3) : "-";
     const std::string time = s.seconds > 0 ? Progress::FormatDuration(s.seconds) : "-";
-    const std::string fill = s.quality.box_fill > 0 ? FormatFixed(s.quality.box_fill, 2) : "-";
+    const std::string fill = s.quality.box_fill > 0 ? Fixed(s.quality.box_fill, 2) : "-";
     std::snprintf(line, sizeof(line), "%-*s  %-4s  %-22s  %7s  %5s  %7s  %s\n", int(name_width),
                   s.name.c_str(), s.used ? "yes" : "no", size.c_str(), inside.c_str(), fill.c_str(),
                   time.c_str(), s.used ? s.file.c_str() : s.reject_reason.c_str());
@@ -278,10 +272,31 @@ std::string TrainSummary::BriefReport() const {
     for (int r = 0; r < eigenvalues.size(); ++r) out << " " << eigenvalues[r];
     out << "\nstandard deviations (m):     ";
     for (int r = 0; r < eigenvalues.size(); ++r) out << " " << std::sqrt(eigenvalues[r]);
-    out << "\nexplained variance: " << FormatFixed(100.0 * explained_variance, 1) << " %";
+    out << "\nexplained variance: " << Fixed(100.0 * explained_variance, 1) << " %";
   }
   out << "\ntotal time: " << Progress::FormatDuration(seconds) << "\n";
   return out.str();
+}
+
+CanonicalizeResult CanonicalCad(const std::string& path, const CanonicalizeOptions& options,
+                                const Eigen::Vector3d& size_factors) {
+  CanonicalizeResult canonical = Canonicalize(LoadMesh(path), options);
+  if (size_factors != Eigen::Vector3d::Ones()) {
+    // Canonical frame: x front (length), y down (height), z left (width),
+    // origin at the bottom centre, which the stretch keeps in place.
+    canonical.mesh.Transform(Eigen::Affine3d(size_factors.asDiagonal()));
+    canonical.size = canonical.size.cwiseProduct(size_factors);
+  }
+  return canonical;
+}
+
+ScannedSdf ScanToSdf(const Mesh& canonical_mesh, const ScanOptions& scan, const GridSpec& grid,
+                     const SdfOptions& sdf) {
+  ScannedSdf result;
+  result.scan = ScanMesh(canonical_mesh, scan);
+  SAMP_CHECK(result.scan.num_hits > 0) << "no scan ray hit the mesh";
+  result.sdf = ComputeSdf(canonical_mesh, result.scan, grid, sdf, /*parallel=*/true);
+  return result;
 }
 
 TrainSummary TrainShapeModel(const TrainOptions& options) {
@@ -323,22 +338,14 @@ TrainSummary TrainShapeModel(const TrainOptions& options) {
       }
       const auto model_start = Clock::now();
       try {
-        const Mesh cad_mesh = LoadMesh(job.path);
-        CanonicalizeResult canonical = Canonicalize(cad_mesh, job.canonicalize);
-        if (job.size_factors != Eigen::Vector3d::Ones()) {
-          // Canonical frame: x front (length), y down (height), z left (width),
-          // origin at the bottom centre, which the stretch keeps in place.
-          canonical.mesh.Transform(Eigen::Affine3d(job.size_factors.asDiagonal()));
-          canonical.size = canonical.size.cwiseProduct(job.size_factors);
-        }
+        const CanonicalizeResult canonical = CanonicalCad(job.path, job.canonicalize, job.size_factors);
         for (const std::string& warning : canonical.warnings) {
           LogWarning() << job.relative_path << ": " << warning;
         }
         shape.scale = canonical.scale;
         shape.size = canonical.size;
-        const ScanResult scan = ScanMesh(canonical.mesh, options.scan);
-        SAMP_CHECK(scan.num_hits > 0) << "no scan ray hit the mesh";
-        Sdf sdf = ComputeSdf(canonical.mesh, scan, options.grid, options.sdf, /*parallel=*/true);
+        ScannedSdf scanned = ScanToSdf(canonical.mesh, options.scan, options.grid, options.sdf);
+        Sdf& sdf = scanned.sdf;
         shape.inside_fraction = sdf.summary.inside_fraction;
         SAMP_CHECK(sdf.summary.sign_ok)
             << "sign failed: inside fraction " << sdf.summary.inside_fraction

@@ -8,6 +8,7 @@
 #include "libsamp/core/grid_spec.h"
 #include "libsamp/model/pca.h"
 #include "libsamp/model/shape_model.h"
+#include "libsamp/scan/canonical.h"
 #include "libsamp/scan/scanner.h"
 #include "libsamp/sdf/sdf.h"
 
@@ -70,5 +71,21 @@ struct TrainSummary {
 
 // Throws samp::Error when fewer than R + 1 usable models remain (after reporting each rejection).
 TrainSummary TrainShapeModel(const TrainOptions& options);
+
+// The chain from one CAD file to its SDF, written once for the trainer and
+// `samp inspect --encode` (which encodes a CAD file as training would):
+// CanonicalCad loads the mesh and puts it into the canonical frame, stretched
+// by `size_factors` (length, height, width) about the bottom centre;
+// ScanToSdf scans the canonical mesh and computes its SDF on `grid` (the
+// caller checks Sdf::summary.sign_ok). Both throw samp::Error: on an
+// unreadable or implausible mesh, or when no scan ray hits the mesh.
+CanonicalizeResult CanonicalCad(const std::string& path, const CanonicalizeOptions& options,
+                                const Eigen::Vector3d& size_factors = Eigen::Vector3d::Ones());
+struct ScannedSdf {
+  ScanResult scan;
+  Sdf sdf;
+};
+ScannedSdf ScanToSdf(const Mesh& canonical_mesh, const ScanOptions& scan, const GridSpec& grid,
+                     const SdfOptions& sdf);
 
 }  // namespace samp

@@ -92,60 +92,6 @@ namespace {
 nlohmann::json Vec(const Eigen::VectorXd& v) {
   return std::vector<double>(v.data(), v.data() + v.size());
 }
-}  // namespace
-
-nlohmann::json TrackFitToJson(const TrackFit& fit, const AlignedBox& box) {
-  nlohmann::json j;
-  j["track_id"] = fit.track_id;
-  j["sequence"] = fit.sequence;
-  j["type"] = fit.type;
-  j["mode"] = fit.single_frame ? "single_frame" : "joint";
-  j["shape_code"] = Vec(fit.shape_code);
-  if (!box.IsEmpty()) {
-    j["box_min"] = Vec(box.min);
-    j["box_max"] = Vec(box.max);
-  }
-  nlohmann::json frames = nlohmann::json::array();
-  for (const FrameFit& f : fit.frames) {
-    nlohmann::json jf;
-    jf["frame"] = f.frame;
-    jf["time"] = f.time;
-    jf["position_world"] = Vec(f.position);
-    jf["yaw"] = f.yaw;
-    jf["speed"] = f.speed;
-    jf["yaw_rate"] = f.yaw_rate;
-    jf["motion_model"] = f.motion_model;
-    jf["num_points"] = f.num_points;
-    jf["effective_points"] = f.effective_points;
-    jf["data_cost"] = f.data_cost;
-    if (fit.single_frame) jf["shape_code"] = Vec(f.shape_code);
-    frames.push_back(jf);
-  }
-  j["frames"] = frames;
-  nlohmann::json s;
-  s["initial_cost"] = fit.summary.initial_cost;
-  s["final_cost"] = fit.summary.final_cost;
-  s["num_iterations"] = fit.summary.num_iterations;
-  s["seconds"] = fit.summary.seconds;
-  s["usable"] = fit.summary.usable;
-  s["association_notes"] = fit.summary.association_notes;
-  nlohmann::json solves = nlohmann::json::array();
-  for (const SolveReport& r : fit.summary.solves) {
-    solves.push_back({{"initial_cost", r.initial_cost},
-                      {"final_cost", r.final_cost},
-                      {"num_iterations", r.num_iterations},
-                      {"seconds", r.seconds},
-                      {"median_step_seconds", r.median_step_seconds},
-                      {"usable", r.usable},
-                      {"num_points", r.num_points},
-                      {"termination", r.termination}});
-  }
-  s["solves"] = solves;
-  j["summary"] = s;
-  return j;
-}
-
-namespace {
 Eigen::VectorXd VectorOf(const JsonFields& fields, const std::string& key) {
   const std::vector<double> v = fields.Get<std::vector<double>>(key);
   return Eigen::Map<const Eigen::VectorXd>(v.data(), Eigen::Index(v.size()));
@@ -157,11 +103,74 @@ Eigen::Vector3d Vector3Of(const JsonFields& fields, const std::string& key) {
 }
 }  // namespace
 
+// The scalar keys of a track's record in tracks.json, listed once for
+// TrackFitToJson and TrackFitFromJson (core/json_fields.h); the mode, the
+// vectors and the arrays are written beside them.
+static void OptionFields(OptionsJson& io, TrackFit& fit) {
+  io("track_id", fit.track_id);
+  io("sequence", fit.sequence);
+  io("type", fit.type);
+}
+
+static void OptionFields(OptionsJson& io, FrameFit& f) {
+  io("frame", f.frame);
+  io("time", f.time);
+  io("yaw", f.yaw);
+  io("speed", f.speed);
+  io("yaw_rate", f.yaw_rate);
+  io("motion_model", f.motion_model);
+  io("num_points", f.num_points);
+  io("effective_points", f.effective_points);
+  io("data_cost", f.data_cost);
+}
+
+static void OptionFields(OptionsJson& io, FitSummary& s) {
+  io("initial_cost", s.initial_cost);
+  io("final_cost", s.final_cost);
+  io("num_iterations", s.num_iterations);
+  io("seconds", s.seconds);
+  io("usable", s.usable);
+  io("association_notes", s.association_notes);
+}
+
+static void OptionFields(OptionsJson& io, SolveReport& r) {
+  io("initial_cost", r.initial_cost);
+  io("final_cost", r.final_cost);
+  io("num_iterations", r.num_iterations);
+  io("seconds", r.seconds);
+  io("median_step_seconds", r.median_step_seconds);
+  io("usable", r.usable);
+  io("num_points", r.num_points);
+  io("termination", r.termination);
+}
+
+nlohmann::json TrackFitToJson(const TrackFit& fit, const AlignedBox& box) {
+  nlohmann::json j = OptionsToJson(fit);
+  j["mode"] = fit.single_frame ? "single_frame" : "joint";
+  j["shape_code"] = Vec(fit.shape_code);
+  if (!box.IsEmpty()) {
+    j["box_min"] = Vec(box.min);
+    j["box_max"] = Vec(box.max);
+  }
+  nlohmann::json frames = nlohmann::json::array();
+  for (const FrameFit& f : fit.frames) {
+    nlohmann::json jf = OptionsToJson(f);
+    jf["position_world"] = Vec(f.position);
+    if (fit.single_frame) jf["shape_code"] = Vec(f.shape_code);
+    frames.push_back(jf);
+  }
+  j["frames"] = frames;
+  nlohmann::json s = OptionsToJson(fit.summary);
+  nlohmann::json solves = nlohmann::json::array();
+  for (const SolveReport& r : fit.summary.solves) solves.push_back(OptionsToJson(r));
+  s["solves"] = solves;
+  j["summary"] = s;
+  return j;
+}
+
 TrackFit TrackFitFromJson(const JsonFields& j, AlignedBox* box) {
   TrackFit fit;
-  j.Read("track_id", &fit.track_id);
-  j.Read("sequence", &fit.sequence);
-  j.Read("type", &fit.type);
+  OptionsFromJson(j, &fit);
   const std::string mode = j.Get<std::string>("mode");
   SAMP_CHECK(mode == "joint" || mode == "single_frame")
       << j.Where() << ": key 'mode' must be \"joint\" or \"single_frame\", got \"" << mode << "\"";
@@ -176,36 +185,16 @@ TrackFit TrackFitFromJson(const JsonFields& j, AlignedBox* box) {
   }
   for (const JsonFields& jf : j.Objects("frames")) {
     FrameFit f;
-    jf.Read("frame", &f.frame);
-    jf.Read("time", &f.time);
+    OptionsFromJson(jf, &f);
     f.position = Vector3Of(jf, "position_world");
-    jf.Read("yaw", &f.yaw);
-    jf.Read("speed", &f.speed);
-    jf.Read("yaw_rate", &f.yaw_rate);
-    jf.Read("motion_model", &f.motion_model);
-    jf.Read("num_points", &f.num_points);
-    jf.Read("effective_points", &f.effective_points);
-    jf.Read("data_cost", &f.data_cost);
     if (fit.single_frame) f.shape_code = VectorOf(jf, "shape_code");
     fit.frames.push_back(std::move(f));
   }
   const JsonFields s = j.Object("summary");
-  s.Read("initial_cost", &fit.summary.initial_cost);
-  s.Read("final_cost", &fit.summary.final_cost);
-  s.Read("num_iterations", &fit.summary.num_iterations);
-  s.Read("seconds", &fit.summary.seconds);
-  s.Read("usable", &fit.summary.usable);
-  s.Read("association_notes", &fit.summary.association_notes);
+  OptionsFromJson(s, &fit.summary);
   for (const JsonFields& js : s.Objects("solves")) {
     SolveReport r;
-    js.Read("initial_cost", &r.initial_cost);
-    js.Read("final_cost", &r.final_cost);
-    js.Read("num_iterations", &r.num_iterations);
-    js.Read("seconds", &r.seconds);
-    js.Read("median_step_seconds", &r.median_step_seconds);
-    js.Read("usable", &r.usable);
-    js.Read("num_points", &r.num_points);
-    js.Read("termination", &r.termination);
+    OptionsFromJson(js, &r);
     fit.summary.solves.push_back(r);
   }
   return fit;

@@ -126,6 +126,20 @@ std::string MeshPrefix(const RunFitOptions& options, const std::string& seq, int
   return dir + "track_" + std::to_string(track_id);
 }
 
+// Writes FOLDER/label_02/<seq>.txt, the labels by frame and then track id; a
+// failure marks the sequence as failed.
+void WriteSequenceLabels(const std::string& folder, std::vector<ObjectLabel> labels, SequenceFitResult* result) {
+  std::stable_sort(labels.begin(), labels.end(), [](const ObjectLabel& a, const ObjectLabel& b) {
+    return a.frame != b.frame ? a.frame < b.frame : a.track_id < b.track_id;
+  });
+  try {
+    WriteTrackingLabels((fs::path(folder) / "label_02" / (result->name + ".txt")).string(), labels);
+  } catch (const std::exception& e) {
+    result->ok = false;
+    result->error = std::string("writing labels: ") + e.what();
+  }
+}
+
 // fitter == nullptr: link only (the tracks' detections are the labels).
 void FitSequence(const RunFitOptions& options, const std::string& folder, const TrackFitter* fitter,
                  size_t index, SequenceWork* work) {
@@ -156,15 +170,7 @@ void FitSequence(const RunFitOptions& options, const std::string& folder, const 
         label.track_id = track.id;
         labels.push_back(label);
       }
-    std::stable_sort(labels.begin(), labels.end(), [](const ObjectLabel& a, const ObjectLabel& b) {
-      return a.frame != b.frame ? a.frame < b.frame : a.track_id < b.track_id;
-    });
-    try {
-      WriteTrackingLabels((fs::path(folder) / "label_02" / (result.name + ".txt")).string(), labels);
-    } catch (const std::exception& e) {
-      result.ok = false;
-      result.error = std::string("writing labels: ") + e.what();
-    }
+    WriteSequenceLabels(folder, std::move(labels), &result);
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return;
   }
@@ -218,15 +224,7 @@ void FitSequence(const RunFitOptions& options, const std::string& folder, const 
       LogWarning() << result.name << ": track " << tracks[t].id << " output failed: " << e.what();
     }
   }
-  std::stable_sort(labels.begin(), labels.end(), [](const ObjectLabel& a, const ObjectLabel& b) {
-    return a.frame != b.frame ? a.frame < b.frame : a.track_id < b.track_id;
-  });
-  try {
-    WriteTrackingLabels((fs::path(folder) / "label_02" / (result.name + ".txt")).string(), labels);
-  } catch (const std::exception& e) {
-    result.ok = false;
-    result.error = std::string("writing labels: ") + e.what();
-  }
+  WriteSequenceLabels(folder, std::move(labels), &result);
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/scan/mesh_io.h"
 
 namespace samp {
 namespace {
@@ -407,6 +408,27 @@ const ManifestEntry* Manifest::Find(const std::string& relative_path) const {
     }
   }
   return found;
+}
+
+std::vector<CadFile> ListCadFiles(const std::string& folder, const Manifest* manifest) {
+  std::vector<CadFile> files;
+  for (const std::string& path : ListMeshFiles(folder)) {
+    CadFile file;
+    file.path = path;
+    file.relative_path = std::filesystem::path(path).lexically_relative(folder).generic_string();
+    file.entry = manifest != nullptr ? manifest->Find(file.relative_path) : nullptr;
+    const bool named = file.entry != nullptr && !file.entry->name.empty();
+    file.name = named ? file.entry->name : std::filesystem::path(path).stem().string();
+    if (file.entry != nullptr) {
+      file.canonicalize = file.entry->canonicalize;
+    } else if (manifest != nullptr) {
+      file.canonicalize = manifest->defaults;
+    }
+    files.push_back(std::move(file));
+  }
+  std::sort(files.begin(), files.end(),
+            [](const CadFile& a, const CadFile& b) { return a.relative_path < b.relative_path; });
+  return files;
 }
 
 Manifest LoadManifest(const std::string& path) {

@@ -86,4 +86,20 @@ struct Manifest {
 // Parses a manifest; throws samp::Error naming the file and the field.
 Manifest LoadManifest(const std::string& path);
 
+// One mesh file of a CAD folder and what the manifest says of it.
+struct CadFile {
+  std::string path;                      // as found below the folder
+  std::string relative_path;             // relative to the CAD folder, '/'-separated
+  const ManifestEntry* entry = nullptr;  // its manifest entry (Manifest::Find), or nullptr
+  std::string name;                      // the entry's name, else the file stem
+  CanonicalizeOptions canonicalize;      // the entry's options, else the manifest's defaults
+};
+
+// The CAD folder walk of `samp train` and `samp synth --cad`: the mesh files
+// below `folder` (ListMeshFiles: symlinked folders followed, each folder
+// once), sorted by relative path, each matched to `manifest` (nullptr: none;
+// else it must outlive the result, whose entries point into it). Throws
+// samp::Error naming the folder when it cannot be listed.
+std::vector<CadFile> ListCadFiles(const std::string& folder, const Manifest* manifest);
+
 }  // namespace samp

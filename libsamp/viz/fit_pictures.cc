@@ -11,6 +11,7 @@
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/core/util.h"
 #include "libsamp/scan/renderer.h"
 #include "libsamp/viz/inspect.h"
 #include "libsamp/viz/plot.h"
@@ -24,12 +25,6 @@ constexpr Rgb kDetectionColor{230, 60, 40};
 constexpr Rgb kFitColor{20, 110, 220};
 constexpr Rgb kGridColor{232, 232, 232};
 constexpr Rgb kAboveTauColor{200, 30, 30};
-
-std::string Fixed(double value, int digits) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, value);
-  return buffer;
-}
 
 Eigen::Vector3f ToUnit(Rgb c) { return Eigen::Vector3f(c.r, c.g, c.b) / 255.f; }
 

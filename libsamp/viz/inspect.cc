@@ -299,19 +299,22 @@ ShapeInput LoadShapeInput(const std::string& path, const ShapeModel& model,
   }
   input.kind = "cad";
   const CanonicalizeOptions canonicalize = CanonicalizeFor(path, manifest_path, &input.name);
-  const CanonicalizeResult canonical = Canonicalize(LoadMesh(path), canonicalize);
+  const CanonicalizeResult canonical = CanonicalCad(path, canonicalize);
   for (const auto& warning : canonical.warnings) LogWarning() << path << ": " << warning;
   ScanOptions scan_options;
   SdfOptions sdf_options;
   TrainingOptions(model, &scan_options, &sdf_options);
-  const ScanResult scan = ScanMesh(canonical.mesh, scan_options);
-  SAMP_CHECK(scan.num_hits > 0) << path << ": no scan ray hit the mesh";
-  Sdf sdf = ComputeSdf(canonical.mesh, scan, model.grid, sdf_options, /*parallel=*/true);
-  SAMP_CHECK(sdf.summary.sign_ok) << path << ": sign carving failed (inside fraction "
-                                  << sdf.summary.inside_fraction << ")";
-  input.sdf = std::move(sdf.values);
+  ScannedSdf scanned;
+  try {
+    scanned = ScanToSdf(canonical.mesh, scan_options, model.grid, sdf_options);
+  } catch (const Error& e) {
+    SAMP_THROW() << path << ": " << e.what();
+  }
+  SAMP_CHECK(scanned.sdf.summary.sign_ok) << path << ": sign carving failed (inside fraction "
+                                          << scanned.sdf.summary.inside_fraction << ")";
+  input.sdf = std::move(scanned.sdf.values);
   input.original = canonical.mesh;
-  input.original_points = scan.SurfacePoints().points;
+  input.original_points = scanned.scan.SurfacePoints().points;
   return input;
 }
 

@@ -12,6 +12,8 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/core/util.h"
+#include "libsamp/model/trainer.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/scan/renderer.h"
 #include "libsamp/viz/inspect.h"
@@ -28,12 +30,6 @@ constexpr Rgb kSubtleColor{110, 110, 110};
 constexpr Rgb kSeparatorColor{225, 225, 225};
 
 double Sigma(const ShapeModel& model, int i) { return std::sqrt(std::max(0.0, model.eigenvalues[i])); }
-
-std::string Fixed(double value, int digits) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, value);
-  return buffer;
-}
 
 // "-2σ", "mean", "+1.5σ".
 std::string SigmaLabel(double k) {
@@ -474,7 +470,7 @@ PictureSummary WritePictures(const ShapeModel& model, const PictureOptions& opti
             const ManifestEntry* entry = manifest.Find(input.source_file);
             canonicalize = entry != nullptr ? entry->canonicalize : manifest.defaults;
           }
-          input.original = Canonicalize(LoadMesh(cad.string()), canonicalize).mesh;
+          input.original = CanonicalCad(cad.string(), canonicalize).mesh;
           input.kind = "cad";
         }
       }

@@ -52,6 +52,23 @@ TEST(GridSpec, CheckNamesTheField) {
   EXPECT_THROW(GridSpec::FromBox(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(-1, 1, 1), 0.1), Error);
 }
 
+// Debug builds end the message with the throwing file and line; release
+// builds keep the message as written.
+TEST(Error, DebugBuildsSayWhere) {
+  std::string message;
+  const int line = __LINE__ + 2;
+  try {
+    SAMP_CHECK(1 + 1 == 3) << "arithmetic";
+  } catch (const Error& e) {
+    message = e.what();
+  }
+#ifdef NDEBUG
+  EXPECT_EQ(message, "arithmetic");
+#else
+  EXPECT_EQ(message, "arithmetic [core_test.cc:" + std::to_string(line) + "]");
+#endif
+}
+
 TEST(Mesh, BoxIsClosedAndOutward) {
   const Mesh box = MakeBoxMesh(Eigen::Vector3d(-1, -2, -3), Eigen::Vector3d(1, 2, 3));
   EXPECT_EQ(box.triangles.size(), 12u);

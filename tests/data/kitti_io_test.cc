@@ -9,9 +9,12 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "libsamp/core/error.h"
+#include "tests/testing/expect_error.h"
 
 namespace samp {
 namespace {
+
+using test::ExpectError;
 
 namespace fs = std::filesystem;
 
@@ -32,19 +35,6 @@ class KittiIoTest : public ::testing::Test {
   }
   fs::path dir_;
 };
-
-// Expects `f` to throw a samp::Error whose message contains every fragment.
-template <typename F>
-void ExpectError(F f, const std::vector<std::string>& fragments) {
-  try {
-    f();
-    FAIL() << "no samp::Error thrown";
-  } catch (const Error& e) {
-    for (const std::string& fragment : fragments)
-      EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos)
-          << "message '" << e.what() << "' lacks '" << fragment << "'";
-  }
-}
 
 const char* kCalib =
     "P0: 721.5377 0 609.5593 0 0 721.5377 172.854 0 0 0 1 0\n"

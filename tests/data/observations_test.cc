@@ -6,6 +6,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/data/stereo.h"
+#include "tests/testing/expect_error.h"
 
 namespace samp {
 namespace {
@@ -183,12 +184,12 @@ TEST(ObservationsTest, SubsamplingIsBoundedAndSeeded) {
 
 TEST(ObservationsTest, OptionsCheck) {
   ObservationOptions options;
-  EXPECT_TRUE(options.Check());
+  EXPECT_NO_THROW(options.Check());
   options.sigma_disparity_px = 0;
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"ObservationOptions.sigma_disparity_px"});
   options = ObservationOptions();
   options.max_points_per_frame = -1;
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"ObservationOptions.max_points_per_frame"});
 }
 
 }  // namespace

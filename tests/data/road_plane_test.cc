@@ -6,6 +6,7 @@
 #include <random>
 
 #include "libsamp/core/error.h"
+#include "tests/testing/expect_error.h"
 
 namespace samp {
 namespace {
@@ -87,12 +88,12 @@ TEST(RoadPlaneTest, ReportsFailureAndReturnsTheDefault) {
 
 TEST(RoadPlaneTest, OptionsCheck) {
   RoadPlaneOptions options;
-  EXPECT_TRUE(options.Check());
+  EXPECT_NO_THROW(options.Check());
   options.inlier_threshold = 0;
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"RoadPlaneOptions.inlier_threshold"});
   options = RoadPlaneOptions();
   options.min_camera_height = 4;
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"RoadPlaneOptions.min_camera_height"});
 }
 
 }  // namespace

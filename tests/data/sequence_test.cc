@@ -11,11 +11,14 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "libsamp/core/error.h"
+#include "tests/testing/expect_error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/data/kitti_io.h"
 
 namespace samp {
 namespace {
+
+using test::ExpectError;
 
 namespace fs = std::filesystem;
 
@@ -263,15 +266,6 @@ TEST_F(SequenceTest, TracksFromALabelFileAndFrameRange) {
   EXPECT_THROW(LoadSequenceTracks(dir_.string(), options, nullptr), Error);
 }
 
-template <typename F>
-void ExpectError(F f, const std::string& fragment) {
-  try {
-    f();
-    FAIL() << "no samp::Error thrown";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
-  }
-}
 
 TEST_F(SequenceTest, StaticCameraWithoutPoses) {
   fs::remove_all(dir_ / "poses");
@@ -286,30 +280,30 @@ TEST_F(SequenceTest, StaticCameraWithoutPoses) {
 }
 
 TEST_F(SequenceTest, BadInputNamesTheFile) {
-  ExpectError([&] { LoadSequenceTracks((dir_.parent_path() / "nope").string(), SequenceOptions()); }, "does not exist");
+  ExpectError([&] { LoadSequenceTracks((dir_.parent_path() / "nope").string(), SequenceOptions()); }, {"does not exist"});
   // Missing detections file of a frame.
   fs::remove(dir_ / "detections" / (Tag(4) + ".txt"));
-  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "detections/000007_04.txt");
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, {"detections/000007_04.txt"});
   WriteLabels((dir_ / "detections" / (Tag(4) + ".txt")).string(), {});
   // Malformed detection.
   std::ofstream((dir_ / "detections" / (Tag(2) + ".txt")).string()) << "Car 0 0 0 1 2 3 4 1 1 1 0 1.6 -4 0\n";
-  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "000007_02.txt:1: object at z = -4");
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, {"000007_02.txt:1: object at z = -4"});
   // The car again (a lone detection in frame 0 followed by two misses would
   // start no track, and no frame would be read).
   WriteLabels((dir_ / "detections" / (Tag(2) + ".txt")).string(), {CarDetection(SmallCalibration(), 2)});
   // Disparity of the wrong size.
   WriteDisparity((dir_ / "disparity" / (Tag(0) + ".png")).string(), cv::Mat(10, 10, CV_32FC1, cv::Scalar(5)));
-  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "000007_00.png: disparity is 10x10");
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, {"000007_00.png: disparity is 10x10"});
   fs::remove(dir_ / "disparity" / (Tag(0) + ".png"));
   // Neither disparity nor the right image.
   fs::remove(dir_ / "image_3" / (Tag(0) + ".png"));
-  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "no image_2/image_3 pair");
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, {"no image_2/image_3 pair"});
   // Poses too short.
   WritePoses((dir_ / "poses" / "000007.txt").string(), {Eigen::Isometry3d::Identity()});
-  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "poses/000007.txt: 1 poses");
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, {"poses/000007.txt: 1 poses"});
   // Missing calibration.
   fs::remove_all(dir_ / "calib");
-  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "no calib/ folder");
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, {"no calib/ folder"});
 }
 
 // The sequence reader knows the image size (from image_2/) and checks the
@@ -318,13 +312,13 @@ TEST_F(SequenceTest, PrincipalPointOutsideTheImageNamesTheFile) {
   StereoCalibration c = SmallCalibration();
   c.camera.cx = 5000;
   WriteCalibration((dir_ / "calib" / "000007.txt").string(), c);
-  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "principal point (5000");
-  ExpectError([&] { SequenceReader reader(dir_.string(), SequenceOptions()); }, "calib/000007.txt:1:");
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, {"principal point (5000"});
+  ExpectError([&] { SequenceReader reader(dir_.string(), SequenceOptions()); }, {"calib/000007.txt:1:"});
 }
 
 TEST_F(SequenceTest, MalformedPlaneNamesTheFile) {
   std::ofstream((dir_ / "planes" / (Tag(0) + ".txt")).string()) << "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1 0\n";
-  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, "000007_00.txt:4: 3 numbers");
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, {"000007_00.txt:4: 3 numbers"});
 }
 
 // ---------------------------------------------------------------------------

@@ -6,6 +6,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "libsamp/core/error.h"
+#include "tests/testing/expect_error.h"
 
 namespace samp {
 namespace {
@@ -57,19 +58,19 @@ TEST(StereoTest, DisparityToPointsSkipsInvalidAndHonoursRoi) {
 
 TEST(StereoTest, OptionsCheck) {
   StereoOptions options;
-  EXPECT_TRUE(options.Check());
+  EXPECT_NO_THROW(options.Check());
   options.num_disparities = 100;
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"StereoOptions.num_disparities"});
   options = StereoOptions();
   options.block_size = 4;
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"StereoOptions.block_size"});
   options = StereoOptions();
   options.mode = "fast";
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"StereoOptions.mode"});
   options = StereoOptions();
   options.p1 = 100;
   options.p2 = 50;
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"StereoOptions.p2"});
 }
 
 TEST(StereoTest, SgbmRecoversAShift) {

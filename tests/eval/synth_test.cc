@@ -14,6 +14,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/wheels.h"
 #include "libsamp/scan/mesh_io.h"
+#include "libsamp/eval/eval_report.h"
 #include "libsamp/eval/evaluation.h"
 #include "libsamp/eval/synth.h"
 #include "libsamp/data/kitti_io.h"
@@ -295,6 +296,13 @@ void CheckGroundTruthAsResult(SynthScene scene) {
                            "f1_vs_tau.png", "translation_vs_distance.png"}) {
     EXPECT_TRUE(fs::exists(eval.output_folder + "/" + file)) << file;
   }
+  // The aggregation alone writes nothing; the writers give the same tables.
+  EvalOptions aggregate_only = eval;
+  aggregate_only.output_folder = root + "/not_written";
+  const EvalResults results = ComputeEvaluation(aggregate_only);
+  EXPECT_FALSE(fs::exists(aggregate_only.output_folder));
+  EXPECT_EQ(results.records.size(), size_t(result.num_gt_car_frames));
+  EXPECT_EQ(EvalMarkdown(eval, results), result.markdown);
   fs::remove_all(root);
 }
 

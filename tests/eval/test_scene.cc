@@ -1,7 +1,11 @@
 #include "tests/eval/test_scene.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <random>
 
 namespace samp::test {
@@ -93,6 +97,41 @@ std::string MakeTempFolder(const std::string& name) {
   fs::remove_all(path);
   fs::create_directories(path);
   return path.string();
+}
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+BoxCarScene::BoxCarScene(const std::string& name, uint64_t seed, int num_sequences, int num_frames) {
+  root = MakeTempFolder(name);
+  SynthOptions synth = QuickSynthOptions(root + "/seqs", seed, SynthScene::kClean);
+  synth.num_sequences = num_sequences;
+  synth.num_frames = num_frames;
+  synth.detector.flip_probability = 0.0;
+  for (const SynthSequenceInfo& q : SynthesizeSequences(synth, {{"boxcar", MakeBoxCar(4.2)}}).sequences) {
+    sequences.push_back(q.folder);
+    names.push_back(q.name);
+  }
+  model = root + "/box_model.vdb";
+  MakeBoxModel().Save(model);
+}
+
+std::string BoxCarScene::Folder(const std::string& name) const {
+  const std::filesystem::path folder = std::filesystem::path(root) / name;
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  return folder.string();
+}
+
+BoxCarScene::~BoxCarScene() {
+  if (!root.empty() && ::testing::UnitTest::GetInstance()->Passed()) {
+    std::error_code ignored;
+    std::filesystem::remove_all(root, ignored);
+  }
 }
 
 }  // namespace samp::test

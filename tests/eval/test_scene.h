@@ -1,7 +1,9 @@
 // Helpers of the eval tests: a small car-like mesh and quick synthesis options.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "libsamp/core/mesh.h"
 #include "libsamp/eval/synth.h"
@@ -24,5 +26,27 @@ ShapeModel MakeBoxModel();
 
 // A fresh empty folder under the system temp directory.
 std::string MakeTempFolder(const std::string& name);
+
+// The bytes of a file ("" when it cannot be read).
+std::string ReadText(const std::string& path);
+
+// `num_sequences` sequences of `num_frames` frames of the clean preset (box
+// cars, no flipped detections; QuickSynthOptions with `seed`) in a fresh temp
+// folder named after `name`, with the box model beside them. The destructor
+// removes the folder when every test of the binary passed (a failure leaves
+// it to look at). Not copyable: make one static instance per test binary.
+struct BoxCarScene {
+  BoxCarScene(const std::string& name, uint64_t seed, int num_sequences, int num_frames);
+  ~BoxCarScene();
+  BoxCarScene(const BoxCarScene&) = delete;
+  BoxCarScene& operator=(const BoxCarScene&) = delete;
+
+  // A fresh empty folder ROOT/name for one test (an earlier one is removed).
+  std::string Folder(const std::string& name) const;
+
+  std::string root;
+  std::vector<std::string> sequences, names;  // each sequence's folder and its <seq>
+  std::string model;                          // MakeBoxModel() as ROOT/box_model.vdb
+};
 
 }  // namespace samp::test

@@ -14,6 +14,7 @@
 #include "libsamp/data/sequence.h"
 #include "libsamp/model/shape_model.h"
 #include "tests/fit/fit_test_util.h"
+#include "tests/testing/expect_error.h"
 
 namespace samp {
 namespace {
@@ -37,15 +38,15 @@ double ShapeError(const ShapeLookup& lookup, const Eigen::VectorXd& z_true, cons
 
 TEST(Fitter, OptionsCheck) {
   FitOptions options;
-  EXPECT_TRUE(options.Check());
+  EXPECT_NO_THROW(options.Check());
   options.linear_solver = "dense_normal_cholesky";
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"FitOptions.linear_solver"});
   options = FitOptions();
   options.em_iterations = -1;
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"FitOptions.em_iterations"});
   options = FitOptions();
   options.linear_solver = "magic";
-  EXPECT_THROW(options.Check(), Error);
+  test::ExpectError([&] { options.Check(); }, {"FitOptions.linear_solver"});
 }
 
 TEST(Fitter, InitializationResolvesFlipsAndArc) {

@@ -13,6 +13,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/pipeline/fit_config.h"
 #include "tests/fit/fit_test_util.h"
+#include "tests/testing/expect_error.h"
 
 namespace samp {
 namespace {
@@ -119,17 +120,7 @@ TEST(FitOutput, JsonRecord) {
   EXPECT_DOUBLE_EQ(j["summary"]["final_cost"].get<double>(), 1.0);
 }
 
-// The error message of `f`, which must throw samp::Error.
-template <typename F>
-std::string ErrorOf(F f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no samp::Error thrown";
-  return "";
-}
+using test::ErrorOf;
 
 std::string TempFile(const std::string& name) {
   const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("samp_fit_output_" + std::to_string(::getpid()));

@@ -20,42 +20,16 @@
 #include "libsamp/pipeline/fit_output.h"
 #include "libsamp/pipeline/run_fit.h"
 #include "tests/eval/test_scene.h"
+#include "tests/testing/expect_error.h"
 
 namespace samp {
 namespace {
 
 namespace fs = std::filesystem;
 
-// The scene's folder goes when the binary ends with every test passed.
-struct Scene {
-  ~Scene() {
-    if (!root.empty() && ::testing::UnitTest::GetInstance()->Passed()) {
-      std::error_code ignored;
-      fs::remove_all(root, ignored);
-    }
-  }
-  std::string root;
-  std::string sequence;      // a sequence folder
-  std::string name;          // its <seq>
-  std::string model;         // the box model
-};
-
-// Synthesised once per test binary (seeded).
-const Scene& TheScene() {
-  static const Scene scene = [] {
-    Scene s;
-    s.root = test::MakeTempFolder("run_fit");
-    SynthOptions synth = test::QuickSynthOptions(s.root + "/seqs", 5, SynthScene::kClean);
-    synth.num_sequences = 1;
-    synth.num_frames = 4;
-    synth.detector.flip_probability = 0.0;
-    const SynthSummary summary = SynthesizeSequences(synth, {{"boxcar", test::MakeBoxCar(4.2)}});
-    s.sequence = summary.sequences.at(0).folder;
-    s.name = summary.sequences.at(0).name;
-    s.model = s.root + "/box_model.vdb";
-    test::MakeBoxModel().Save(s.model);
-    return s;
-  }();
+// One 4-frame sequence, synthesised once per test binary (seeded).
+const test::BoxCarScene& TheScene() {
+  static const test::BoxCarScene scene("run_fit", 5, 1, 4);
   return scene;
 }
 
@@ -80,27 +54,12 @@ RunFitOptions UnusableOptions(const std::vector<std::string>& sequences, const s
   return o;
 }
 
-// A fresh folder for one test, beside nothing else.
-std::string Folder(const std::string& name) {
-  const fs::path folder = fs::path(TheScene().root) / name;
-  fs::remove_all(folder);
-  fs::create_directories(folder);
-  return folder.string();
-}
-
 // Every path under `folder`, relative, sorted.
 std::set<std::string> Listing(const std::string& folder) {
   std::set<std::string> paths;
   for (const auto& entry : fs::recursive_directory_iterator(folder))
     paths.insert(entry.path().lexically_relative(folder).string());
   return paths;
-}
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 // The names in `folder` that start with ".tmp." (temporaries of samp).
@@ -113,28 +72,19 @@ std::vector<std::string> Temporaries(const std::string& folder) {
   return names;
 }
 
-template <typename F>
-std::string ErrorOf(F f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no samp::Error thrown";
-  return "";
-}
+using test::ErrorOf;
 
 // A run that fits tracks writes labels and meshes; a later run into the same
 // folder that fits none (every solve unusable), or whose every sequence
 // fails, replaces the folder as a whole: no label line, mesh, picture or page
 // of the earlier run survives.
 TEST(RunFit, ReplacesTheOutputOfAnEarlierRun) {
-  const Scene& scene = TheScene();
-  const std::string runs = Folder("replace");
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("replace");
   const std::string out = runs + "/out";
-  const std::string labels = out + "/label_02/" + scene.name + ".txt";
+  const std::string labels = out + "/label_02/" + scene.names[0] + ".txt";
 
-  const RunFitSummary first = RunFit(Options(scene.model, {scene.sequence}, out));
+  const RunFitSummary first = RunFit(Options(scene.model, {scene.sequences[0]}, out));
   ASSERT_GT(first.num_tracks_fitted, 0) << first.BriefReport();
   EXPECT_EQ(first.failure, "");
   EXPECT_FALSE(first.replaced_previous_output);
@@ -142,15 +92,15 @@ TEST(RunFit, ReplacesTheOutputOfAnEarlierRun) {
   ASSERT_TRUE(fs::is_directory(out + "/meshes"));
   // What `samp view` and --pictures add to a fit folder.
   WriteTextFileAtomically(out + "/index.html", "<html></html>");
-  WriteTextFileAtomically(out + "/pictures/" + scene.name + "/birdseye.png", "png");
+  WriteTextFileAtomically(out + "/pictures/" + scene.names[0] + "/birdseye.png", "png");
 
   // Zero tracks fitted: every solve unusable.
-  const RunFitSummary second = RunFit(UnusableOptions({scene.sequence}, out));
+  const RunFitSummary second = RunFit(UnusableOptions({scene.sequences[0]}, out));
   EXPECT_EQ(second.num_tracks_fitted, 0);
   EXPECT_NE(second.failure, "");
   EXPECT_TRUE(second.replaced_previous_output);
   EXPECT_TRUE(ReadTrackingLabels(labels).empty());
-  EXPECT_EQ(Listing(out), (std::set<std::string>{"config.json", "label_02", "label_02/" + scene.name + ".txt",
+  EXPECT_EQ(Listing(out), (std::set<std::string>{"config.json", "label_02", "label_02/" + scene.names[0] + ".txt",
                                                  "tracks.json"}));
   const TracksFile tracks = ReadTracksFile(out + "/tracks.json");
   ASSERT_EQ(tracks.sequences.size(), 1u);
@@ -169,14 +119,14 @@ TEST(RunFit, ReplacesTheOutputOfAnEarlierRun) {
 // A run that throws (a model that does not load, an error in what is written
 // last) leaves the earlier output exactly as it was and no temporary folder.
 TEST(RunFit, RunThatThrowsLeavesTheOutputAsItWas) {
-  const Scene& scene = TheScene();
-  const std::string runs = Folder("throws");
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("throws");
   const std::string out = runs + "/out";
-  RunFitOptions options = Options(scene.model, {scene.sequence}, out);
+  RunFitOptions options = Options(scene.model, {scene.sequences[0]}, out);
   options.write_meshes = false;
   ASSERT_GT(RunFit(options).num_tracks_fitted, 0);
   const std::set<std::string> listing = Listing(out);
-  const std::string tracks = ReadText(out + "/tracks.json");
+  const std::string tracks = test::ReadText(out + "/tracks.json");
 
   RunFitOptions no_model = options;
   no_model.model_path = runs + "/missing.vdb";
@@ -197,50 +147,50 @@ TEST(RunFit, RunThatThrowsLeavesTheOutputAsItWas) {
   EXPECT_TRUE(called);
 
   EXPECT_EQ(Listing(out), listing);
-  EXPECT_EQ(ReadText(out + "/tracks.json"), tracks);
+  EXPECT_EQ(test::ReadText(out + "/tracks.json"), tracks);
   EXPECT_TRUE(Temporaries(runs).empty());
 }
 
 // Only new, empty or samp fit folders are replaced; the others are refused
 // before anything is read, and stay as they were.
 TEST(RunFit, RefusesOutputFoldersItMustNotReplace) {
-  const Scene& scene = TheScene();
-  const std::string runs = Folder("refuse");
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("refuse");
 
   const std::string file = runs + "/a_file";
   WriteTextFileAtomically(file, "keep");
-  EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {scene.sequence}, file)); }).find("is not a folder"),
+  EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, file)); }).find("is not a folder"),
             std::string::npos);
-  EXPECT_EQ(ReadText(file), "keep");
+  EXPECT_EQ(test::ReadText(file), "keep");
 
   const std::string mine = runs + "/my_folder";
   WriteTextFileAtomically(mine + "/notes.txt", "keep");
-  const std::string message = ErrorOf([&] { RunFit(Options(scene.model, {scene.sequence}, mine)); });
+  const std::string message = ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, mine)); });
   EXPECT_NE(message.find(mine), std::string::npos) << message;
   EXPECT_NE(message.find("not the output of a samp fit"), std::string::npos) << message;
   EXPECT_EQ(Listing(mine), (std::set<std::string>{"notes.txt"}));
 
   // The folder that holds the sequence (or the model, or is the sequence).
-  const std::string parent = fs::path(scene.sequence).parent_path().string();
-  const std::string holds = ErrorOf([&] { RunFit(Options(scene.model, {scene.sequence}, parent)); });
-  EXPECT_NE(holds.find("holds the input sequence " + scene.sequence), std::string::npos) << holds;
-  EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {scene.sequence}, scene.sequence + "/")); })
+  const std::string parent = fs::path(scene.sequences[0]).parent_path().string();
+  const std::string holds = ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, parent)); });
+  EXPECT_NE(holds.find("holds the input sequence " + scene.sequences[0]), std::string::npos) << holds;
+  EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, scene.sequences[0] + "/")); })
                 .find("holds the input sequence"),
             std::string::npos);
-  EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {scene.sequence}, scene.root)); }).find("holds the input"),
+  EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, scene.root)); }).find("holds the input"),
             std::string::npos);
 
   // The current folder (or one holding it).
   const fs::path cwd = fs::current_path();
   fs::current_path(runs);
-  const std::string here = ErrorOf([&] { RunFit(Options(scene.model, {scene.sequence}, ".")); });
+  const std::string here = ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, ".")); });
   fs::current_path(cwd);
   EXPECT_NE(here.find("is the current folder"), std::string::npos) << here;
 
   // An empty folder is fine.
   const std::string empty = runs + "/empty";
   fs::create_directories(empty);
-  RunFitOptions options = Options(scene.model, {scene.sequence}, empty);
+  RunFitOptions options = Options(scene.model, {scene.sequences[0]}, empty);
   options.link_only = true;
   EXPECT_EQ(RunFit(options).failure, "");
   EXPECT_TRUE(fs::exists(empty + "/tracks.json"));
@@ -250,38 +200,38 @@ TEST(RunFit, RefusesOutputFoldersItMustNotReplace) {
 // Two sequences with one name would write the same label_02/<seq>.txt and
 // meshes/<seq>/: an error naming both paths before anything is fitted.
 TEST(RunFit, SameNamedSequencesAreAnError) {
-  const Scene& scene = TheScene();
-  const std::string runs = Folder("same_name");
-  const std::string a = runs + "/a/" + scene.name, b = runs + "/b/" + scene.name;
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("same_name");
+  const std::string a = runs + "/a/" + scene.names[0], b = runs + "/b/" + scene.names[0];
   fs::create_directories(runs + "/a");
   fs::create_directories(runs + "/b");
-  fs::copy(scene.sequence, a, fs::copy_options::recursive);
-  fs::copy(scene.sequence, b, fs::copy_options::recursive);
+  fs::copy(scene.sequences[0], a, fs::copy_options::recursive);
+  fs::copy(scene.sequences[0], b, fs::copy_options::recursive);
   const std::string out = runs + "/out";
   const std::string message = ErrorOf([&] { RunFit(Options(scene.model, {a, b}, out)); });
   EXPECT_NE(message.find(a + " and " + b), std::string::npos) << message;
-  EXPECT_NE(message.find("'" + scene.name + "'"), std::string::npos) << message;
+  EXPECT_NE(message.find("'" + scene.names[0] + "'"), std::string::npos) << message;
   EXPECT_EQ(message.find('\n'), std::string::npos) << message;
   EXPECT_FALSE(fs::exists(out));
   // The same folder twice, once with a trailing slash; and a folder that is
   // no sequence (named by its folder) beside a sequence of that name.
   EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {a, a + "/"}, out)); }).find("the same name"),
             std::string::npos);
-  const std::string not_a_sequence = runs + "/c/" + scene.name;
+  const std::string not_a_sequence = runs + "/c/" + scene.names[0];
   fs::create_directories(not_a_sequence);
   EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {a, not_a_sequence}, out)); }).find("the same name"),
             std::string::npos);
   EXPECT_FALSE(fs::exists(out));
-  EXPECT_EQ(SequenceOutputName(a + "/"), scene.name);
+  EXPECT_EQ(SequenceOutputName(a + "/"), scene.names[0]);
 }
 
 // A solve that Ceres marks not usable is a failed track: listed with its
 // reason, no label line, mesh or record; a run where every track failed has
 // a failure (samp fit exits 1) and the hook of a successful run is not called.
 TEST(RunFit, UnusableSolveIsAFailedTrack) {
-  const Scene& scene = TheScene();
-  const std::string out = Folder("unusable") + "/out";
-  RunFitOptions options = UnusableOptions({scene.sequence}, out);
+  const test::BoxCarScene& scene = TheScene();
+  const std::string out = TheScene().Folder("unusable") + "/out";
+  RunFitOptions options = UnusableOptions({scene.sequences[0]}, out);
   bool called = false;
   options.before_commit = [&](const std::string&) { called = true; };
   const RunFitSummary summary = RunFit(options);
@@ -303,7 +253,7 @@ TEST(RunFit, UnusableSolveIsAFailedTrack) {
             std::string::npos)
       << summary.failure;
   EXPECT_FALSE(called);
-  EXPECT_TRUE(ReadTrackingLabels(out + "/label_02/" + scene.name + ".txt").empty());
+  EXPECT_TRUE(ReadTrackingLabels(out + "/label_02/" + scene.names[0] + ".txt").empty());
   EXPECT_FALSE(fs::exists(out + "/meshes"));
   const TracksFile tracks = ReadTracksFile(out + "/tracks.json");
   EXPECT_TRUE(tracks.sequences.at(0).tracks.empty());
@@ -311,7 +261,7 @@ TEST(RunFit, UnusableSolveIsAFailedTrack) {
 
   // The same input with the default sigma_ground: every track is fitted (so
   // the failure above is that option's, nothing else).
-  const RunFitSummary good = RunFit(Options(scene.model, {scene.sequence}, out));
+  const RunFitSummary good = RunFit(Options(scene.model, {scene.sequences[0]}, out));
   EXPECT_EQ(good.num_tracks_fitted, sequence.num_tracks) << good.BriefReport();
   EXPECT_EQ(good.failure, "");
 }
@@ -319,19 +269,19 @@ TEST(RunFit, UnusableSolveIsAFailedTrack) {
 // The temporary output folder of a run killed with -9 is removed by the next
 // run beside it; one of a running process is kept.
 TEST(RunFit, RemovesTheTemporaryFolderOfAKilledRun) {
-  const Scene& scene = TheScene();
-  const std::string runs = Folder("killed");
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("killed");
   const pid_t child = ::fork();
   ASSERT_GE(child, 0);
   if (child == 0) ::_exit(0);
   int status = 0;
   ASSERT_EQ(::waitpid(child, &status, 0), child);  // `child` no longer runs
   const std::string orphan = runs + "/.tmp." + std::to_string(child) + ".0.out";
-  WriteTextFileAtomically(orphan + "/out/label_02/" + scene.name + ".txt", "");
+  WriteTextFileAtomically(orphan + "/out/label_02/" + scene.names[0] + ".txt", "");
   WriteTextFileAtomically(orphan + "/out/meshes/track_1.ply", "ply");
   const std::string alive = runs + "/.tmp." + std::to_string(::getppid()) + ".0.out";
   fs::create_directories(alive + "/out");
-  RunFitOptions options = Options(scene.model, {scene.sequence}, runs + "/out");
+  RunFitOptions options = Options(scene.model, {scene.sequences[0]}, runs + "/out");
   options.link_only = true;
   RunFit(options);
   EXPECT_FALSE(fs::exists(orphan));

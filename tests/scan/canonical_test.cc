@@ -4,25 +4,14 @@
 
 #include "libsamp/core/error.h"
 #include "test_util.h"
+#include "tests/testing/expect_error.h"
 
 namespace samp {
 namespace {
 
 namespace fs = std::filesystem;
 
-// Expects `f` to throw samp::Error whose message contains every one of `parts`.
-template <typename F>
-void ExpectErrorContaining(const F& f, const std::vector<std::string>& parts) {
-  try {
-    f();
-    ADD_FAILURE() << "expected a samp::Error";
-  } catch (const Error& e) {
-    for (const std::string& part : parts) {
-      EXPECT_NE(std::string(e.what()).find(part), std::string::npos)
-          << "'" << part << "' not in: " << e.what();
-    }
-  }
-}
+using test::ExpectError;
 
 // A 4.5 x 1.5 x 1.8 m car box in centimetres, z up, front towards -y:
 // CAD x = width (180), y = length (450), z = height (150), resting on z = 20.
@@ -159,10 +148,10 @@ TEST(Canonicalize, RejectsImplausibleSizesNamingThem) {
   CanonicalizeOptions options;  // no scale: centimetres taken as metres
   options.up = "+z";
   options.forward = "-y";
-  ExpectErrorContaining([&] { Canonicalize(CentimetreCarBox(), options); },
+  ExpectError([&] { Canonicalize(CentimetreCarBox(), options); },
                         {"implausible", "450.000", "150.000", "180.000"});
   options.scale = 0.001;  // ten times too small
-  ExpectErrorContaining([&] { Canonicalize(CentimetreCarBox(), options); }, {"0.450"});
+  ExpectError([&] { Canonicalize(CentimetreCarBox(), options); }, {"0.450"});
   EXPECT_THROW(Canonicalize(Mesh(), CanonicalizeOptions()), Error);
 }
 
@@ -170,17 +159,17 @@ TEST(Canonicalize, OptionsCheckNamesTheField) {
   CanonicalizeOptions options;
   options.scale = 0.01;
   options.target_length = 4.0;
-  ExpectErrorContaining([&] { options.Check(); }, {"target_length"});
+  ExpectError([&] { options.Check(); }, {"target_length"});
   options = CanonicalizeOptions();
   options.up = "up";
-  ExpectErrorContaining([&] { options.Check(); }, {"up"});
+  ExpectError([&] { options.Check(); }, {"up"});
   options = CanonicalizeOptions();
   options.up = "+y";
   options.forward = "-y";
-  ExpectErrorContaining([&] { options.Check(); }, {"different axes"});
+  ExpectError([&] { options.Check(); }, {"different axes"});
   options = CanonicalizeOptions();
   options.scale = -1;
-  ExpectErrorContaining([&] { options.Check(); }, {"scale"});
+  ExpectError([&] { options.Check(); }, {"scale"});
 }
 
 TEST(Manifest, ParsesDefaultsEntriesAndFinds) {
@@ -254,9 +243,9 @@ TEST(Manifest, ErrorsNameTheFileAndField) {
   for (const Case& c : cases) {
     SCOPED_TRACE(c.json);
     test::WriteText(path, c.json);
-    ExpectErrorContaining([&] { LoadManifest(file); }, c.parts);
+    ExpectError([&] { LoadManifest(file); }, c.parts);
   }
-  ExpectErrorContaining([&] { LoadManifest((dir / "missing.json").string()); }, {"missing.json"});
+  ExpectError([&] { LoadManifest((dir / "missing.json").string()); }, {"missing.json"});
   fs::remove_all(dir);
 }
 

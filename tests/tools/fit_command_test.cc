@@ -23,51 +23,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The scene's folder goes when the binary ends with every test passed.
-struct Scene {
-  ~Scene() {
-    if (!root.empty() && ::testing::UnitTest::GetInstance()->Passed()) {
-      std::error_code ignored;
-      fs::remove_all(root, ignored);
-    }
-  }
-  std::string root;
-  std::vector<std::string> sequences, names;
-  std::string model;
-};
-
 // Two sequences of 4 frames (clean preset) and the box model.
-const Scene& TheScene() {
-  static const Scene scene = [] {
-    Scene s;
-    s.root = test::MakeTempFolder("fit_command");
-    SynthOptions synth = test::QuickSynthOptions(s.root + "/seqs", 11, SynthScene::kClean);
-    synth.num_frames = 4;
-    synth.detector.flip_probability = 0.0;
-    for (const SynthSequenceInfo& q :
-         SynthesizeSequences(synth, {{"boxcar", test::MakeBoxCar(4.2)}}).sequences) {
-      s.sequences.push_back(q.folder);
-      s.names.push_back(q.name);
-    }
-    s.model = s.root + "/box_model.vdb";
-    test::MakeBoxModel().Save(s.model);
-    return s;
-  }();
+const test::BoxCarScene& TheScene() {
+  static const test::BoxCarScene scene("fit_command", 11, 2, 4);
   return scene;
-}
-
-std::string ReadText(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string Folder(const std::string& name) {
-  const fs::path folder = fs::path(TheScene().root) / name;
-  fs::remove_all(folder);
-  fs::create_directories(folder);
-  return folder.string();
 }
 
 // Starts `samp ARGS` with stdout and stderr into `log_prefix`.{out,err}.
@@ -98,7 +57,7 @@ int RunSamp(const std::vector<std::string>& args, const std::string& log_prefix,
   if (child < 0) return -1;
   int status = 0;
   if (::waitpid(child, &status, 0) != child) return -1;
-  *stderr_text = ReadText(log_prefix + ".err");
+  *stderr_text = test::ReadText(log_prefix + ".err");
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
@@ -117,8 +76,8 @@ std::string LastLine(const std::string& text) {
 // which no command-line option can): exit status 1 with one error line, and
 // the run's record is still written.
 TEST(FitCommand, EveryTrackFailedExitsOne) {
-  const Scene& scene = TheScene();
-  const std::string runs = Folder("every_track_failed");
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("every_track_failed");
   const std::string out = runs + "/out";
   std::string err;
   const int status = RunSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--out", out,
@@ -141,8 +100,8 @@ TEST(FitCommand, EveryTrackFailedExitsOne) {
 }
 
 TEST(FitCommand, SameNamedSequencesExitOneBeforeFitting) {
-  const Scene& scene = TheScene();
-  const std::string runs = Folder("same_name");
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("same_name");
   const std::string a = runs + "/a/" + scene.names[0], b = runs + "/b/" + scene.names[0];
   fs::create_directories(runs + "/a");
   fs::create_directories(runs + "/b");
@@ -165,17 +124,17 @@ TEST(FitCommand, SameNamedSequencesExitOneBeforeFitting) {
 // the earlier output exactly as it was and no temporary folder; the process
 // ends by the signal.
 TEST(FitCommand, InterruptedRunLeavesTheEarlierOutput) {
-  const Scene& scene = TheScene();
+  const test::BoxCarScene& scene = TheScene();
   ASSERT_EQ(scene.sequences.size(), 2u);
-  const std::string runs = Folder("interrupted");
+  const std::string runs = TheScene().Folder("interrupted");
   const std::string out = runs + "/out";
   std::string err;
   ASSERT_EQ(RunSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--out", out, "-q"}, runs + "/log",
                     &err),
             0)
       << err;
-  const std::string tracks_before = ReadText(out + "/tracks.json");
-  const std::string labels_before = ReadText(out + "/label_02/" + scene.names[0] + ".txt");
+  const std::string tracks_before = test::ReadText(out + "/tracks.json");
+  const std::string labels_before = test::ReadText(out + "/label_02/" + scene.names[0] + ".txt");
 
   const std::string fifo = runs + "/blocked_tracks.txt";
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
@@ -201,7 +160,7 @@ TEST(FitCommand, InterruptedRunLeavesTheEarlierOutput) {
     }
     int status = 0;
     if (!written && ::waitpid(child, &status, WNOHANG) == child) {
-      FAIL() << "samp ended before it was interrupted: " << ReadText(runs + "/log_interrupted.err");
+      FAIL() << "samp ended before it was interrupted: " << test::ReadText(runs + "/log_interrupted.err");
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
@@ -215,8 +174,8 @@ TEST(FitCommand, InterruptedRunLeavesTheEarlierOutput) {
   for (const auto& entry : fs::directory_iterator(runs)) {
     EXPECT_NE(entry.path().filename().string().rfind(".tmp.", 0), 0u) << "left behind: " << entry.path();
   }
-  EXPECT_EQ(ReadText(out + "/tracks.json"), tracks_before);
-  EXPECT_EQ(ReadText(out + "/label_02/" + scene.names[0] + ".txt"), labels_before);
+  EXPECT_EQ(test::ReadText(out + "/tracks.json"), tracks_before);
+  EXPECT_EQ(test::ReadText(out + "/label_02/" + scene.names[0] + ".txt"), labels_before);
   EXPECT_FALSE(fs::exists(out + "/label_02/" + scene.names[1] + ".txt"));
   EXPECT_FALSE(fs::exists(out + "/meshes/" + scene.names[0]));  // one sequence before: meshes/track_<id>.ply
 }
