@@ -23,6 +23,11 @@ class ByteReader {
   size_t end() const { return end_; }
   size_t remaining() const { return end_ - pos_; }
   const std::string& context() const { return context_; }
+  // Moves the end of the readable range (at most the buffer's size, at least pos()).
+  void SetEnd(size_t end) {
+    end_ = end < bytes_.size() ? end : bytes_.size();
+    if (end_ < pos_) end_ = pos_;
+  }
 
   void Seek(int64_t pos, const char* what) {
     SAMP_CHECK(pos >= 0 && uint64_t(pos) <= end_)
@@ -44,6 +49,7 @@ class ByteReader {
     SAMP_CHECK(n <= remaining() / sizeof(T))
         << context_ << ": truncated or corrupt file: " << what << " at byte " << pos_ << " needs "
         << n << " x " << sizeof(T) << " bytes, " << remaining() << " remain";
+    if (n == 0) return;  // `out` may be null
     std::memcpy(out, bytes_.data() + pos_, n * sizeof(T));
     pos_ += n * sizeof(T);
   }
@@ -76,7 +82,7 @@ class ByteReader {
 
   const std::string& bytes_;
   const std::string context_;
-  const size_t end_;
+  size_t end_;
   size_t pos_ = 0;
 };
 

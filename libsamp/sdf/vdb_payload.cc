@@ -130,7 +130,10 @@ class GridDecoder {
         << "' (flags " << ref_.compression
         << "); samp reads the layout it writes: blosc or zip, each with active values";
     blosc_ = (ref_.compression & kCompressBlosc) != 0;
+    // The transform and the topology lie before the block offset, the
+    // buffers between it and the end offset: each is read within its range.
     in_.Seek(int64_t(ref_.transform), "the transform");
+    in_.SetEnd(ref_.block);
     ReadTransform(transform);
 
     const int64_t voxels = dims_[0] * dims_[1] * dims_[2];
@@ -142,6 +145,7 @@ class GridDecoder {
         << Where() << ": the topology ends at byte " << in_.pos()
         << ", the grid descriptor puts the buffers at byte " << ref_.block;
     if (layout_ != nullptr) layout_->block = in_.pos();
+    in_.SetEnd(ref_.end);
     ReadLeafBuffers();
     SAMP_CHECK(in_.pos() == ref_.end)
         << Where() << ": " << (ref_.end - in_.pos()) << " bytes after the last of its "
