@@ -60,6 +60,15 @@ struct NodeMask {
     return false;
   }
   bool operator==(const NodeMask& other) const { return words == other.words; }
+  // Calls f(n) for every set bit n, in increasing order.
+  template <typename F>
+  void ForEachOn(F f) const {
+    for (int w = 0; w < kWords; ++w) {
+      for (uint64_t word = words[size_t(w)]; word != 0; word &= word - 1) {
+        f(w * 64 + __builtin_ctzll(word));
+      }
+    }
+  }
   void Read(ByteReader* in, const char* what) { in->ReadArray(words.data(), size_t(kWords), what); }
 };
 
@@ -98,6 +107,15 @@ std::string Printable(const std::string& text) {
   }
   if (text.size() > 64) out += "...";
   return out;
+}
+
+// A node named in errors ("leaf at (8, 0, 16)"), formatted only on failure.
+struct NodeName {
+  const char* kind;
+  Coord origin;
+};
+std::ostream& operator<<(std::ostream& out, const NodeName& node) {
+  return out << node.kind << " at " << Format(node.origin);
 }
 
 struct LeafRecord {
@@ -326,29 +344,28 @@ class GridDecoder {
     };
     // Every child inside the box, every active tile wholly inside it, before
     // anything is read for them.
-    for (int n = 0; n < NodeMask<kLog2Dim>::kSize; ++n) {
-      if (child_mask.On(n)) {
-        const Coord c = child_origin(n);
-        SAMP_CHECK(OriginInBox(c))
-            << Where() << ": " << (kLog2Dim == 5 ? "lower internal node" : "leaf") << " at "
-            << Format(c) << " outside " << box_;
-      } else if (value_mask.On(n)) {
-        const Coord c = child_origin(n);
-        SAMP_CHECK(RegionInBox(c, kChildLog2))
-            << Where() << ": active tile of the " << kind << " at " << Format(c) << " (side "
-            << (int64_t(1) << kChildLog2) << ") reaches outside " << box_;
-      }
-    }
+    child_mask.ForEachOn([&](int n) {
+      const Coord c = child_origin(n);
+      SAMP_CHECK(OriginInBox(c)) << Where() << ": "
+                                 << NodeName{kLog2Dim == 5 ? "lower internal node" : "leaf", c}
+                                 << " outside " << box_;
+    });
+    value_mask.ForEachOn([&](int n) {
+      const Coord c = child_origin(n);
+      SAMP_CHECK(RegionInBox(c, kChildLog2))
+          << Where() << ": active tile of the " << kind << " at " << Format(c) << " (side "
+          << (int64_t(1) << kChildLog2) << ") reaches outside " << box_;
+      active_voxels_ += int64_t(1) << (3 * kChildLog2);
+    });
     std::vector<float>& slots = kLog2Dim == 5 ? upper_slots_ : lower_slots_;
     slots.resize(size_t(NodeMask<kLog2Dim>::kSize));
-    const std::string node = std::string(kind) + " at " + Format(origin);
-    ReadCompressedValues(value_mask, slots.data(), node);
+    ReadCompressedValues(value_mask, slots.data(), NodeName{kind, origin});
+    // Tiles: only values other than the background change the dense grid.
     for (int n = 0; n < NodeMask<kLog2Dim>::kSize; ++n) {
-      if (child_mask.On(n)) continue;
-      AddTile(child_origin(n), kChildLog2, slots[size_t(n)], value_mask.On(n), kind);
+      if (FloatBits(slots[size_t(n)]) == background_bits_ || child_mask.On(n)) continue;
+      FillRegion(child_origin(n), kChildLog2, slots[size_t(n)]);
     }
-    for (int n = 0; n < NodeMask<kLog2Dim>::kSize; ++n) {
-      if (!child_mask.On(n)) continue;
+    child_mask.ForEachOn([&](int n) {
       const Coord c = child_origin(n);
       if constexpr (kLog2Dim == 5) {
         ReadInternal<4>(c);
@@ -366,18 +383,25 @@ class GridDecoder {
         active_voxels_ += leaf.mask.Count();
         leaves_.push_back(leaf);
       }
-    }
+    });
   }
 
   // A leaf straddling the box edge may hold voxels outside it, inactive only.
+  // Word lx of a leaf mask holds the voxels (lx, ly, lz) at bit 8 ly + lz.
   void CheckLeafActiveInBox(const LeafRecord& leaf) const {
     if (RegionInBox(leaf.origin, kLeafLog2)) return;
-    for (int n = 0; n < NodeMask<kLeafLog2>::kSize; ++n) {
-      if (!leaf.mask.On(n)) continue;
-      const Coord local = SlotOffset(n, kLeafLog2);
-      const Coord c{leaf.origin[0] + local[0], leaf.origin[1] + local[1], leaf.origin[2] + local[2]};
-      SAMP_CHECK(OriginInBox(c)) << Where() << ": leaf at " << Format(leaf.origin)
-                                 << " has an active voxel at " << Format(c) << " outside " << box_;
+    const int side = 1 << kLeafLog2;
+    int hi[3];
+    for (int a = 0; a < 3; ++a) hi[a] = int(std::min<int64_t>(side, dims_[a] - leaf.origin[a]));
+    uint64_t inside_word = 0;
+    for (int ly = 0; ly < hi[1]; ++ly) inside_word |= ((uint64_t(1) << hi[2]) - 1) << (side * ly);
+    for (int lx = 0; lx < side; ++lx) {
+      const uint64_t outside = leaf.mask.words[size_t(lx)] & ~(lx < hi[0] ? inside_word : 0);
+      if (outside == 0) continue;
+      const int bit = __builtin_ctzll(outside);
+      const Coord c{leaf.origin[0] + lx, leaf.origin[1] + bit / side, leaf.origin[2] + bit % side};
+      SAMP_THROW() << Where() << ": leaf at " << Format(leaf.origin) << " has an active voxel at "
+                   << Format(c) << " outside " << box_;
     }
   }
 
@@ -385,8 +409,8 @@ class GridDecoder {
   // active-mask compression: metadata byte, up to two inactive values, the
   // selection mask, then one chunk with the stored values.
   template <int kLog2Dim>
-  void ReadCompressedValues(const NodeMask<kLog2Dim>& value_mask, float* out,
-                            const std::string& node, VdbPayloadLayout::Leaf* entry = nullptr) {
+  void ReadCompressedValues(const NodeMask<kLog2Dim>& value_mask, float* out, const NodeName& node,
+                            VdbPayloadLayout::Leaf* entry = nullptr) {
     constexpr int kCount = NodeMask<kLog2Dim>::kSize;
     if (entry != nullptr) entry->metadata = in_.pos();
     const int8_t metadata = in_.Read<int8_t>("node metadata byte");
@@ -415,18 +439,17 @@ class GridDecoder {
     stored_.resize(size_t(stored));
     ReadChunk(size_t(stored) * sizeof(float), reinterpret_cast<char*>(stored_.data()), node, stored,
               entry);
-    for (int n = 0, s = 0; n < kCount; ++n) {
-      if (value_mask.On(n)) {
-        out[n] = stored_[size_t(s++)];
-      } else {
-        out[n] = selection.On(n) ? inactive1 : inactive0;
-      }
-    }
+    // Inactive values first (inactive1 where the selection mask says), then
+    // the stored values in mask order.
+    std::fill(out, out + kCount, inactive0);
+    selection.ForEachOn([&](int n) { out[n] = inactive1; });
+    int next = 0;
+    value_mask.ForEachOn([&](int n) { out[n] = stored_[size_t(next++)]; });
   }
 
   // io::readData's chunk: an int64 size (negative: that many raw bytes follow),
   // then a blosc or zip stream that must decompress to exactly `expected` bytes.
-  void ReadChunk(size_t expected, char* out, const std::string& node, int values,
+  void ReadChunk(size_t expected, char* out, const NodeName& node, int values,
                  VdbPayloadLayout::Leaf* entry) {
     if (entry != nullptr) entry->chunk_size = in_.pos();
     const int64_t size = in_.Read<int64_t>("chunk size");
@@ -485,7 +508,7 @@ class GridDecoder {
     for (size_t l = 0; l < leaves_.size(); ++l) {
       const LeafRecord& leaf = leaves_[l];
       VdbPayloadLayout::Leaf* entry = layout_ != nullptr ? &layout_->leaves[l] : nullptr;
-      const std::string node = "leaf at " + Format(leaf.origin);
+      const NodeName node{"leaf", leaf.origin};
       if (entry != nullptr) entry->buffer_mask = in_.pos();
       NodeMask<kLeafLog2> mask;
       mask.Read(&in_, "leaf value mask");
@@ -493,17 +516,16 @@ class GridDecoder {
                                     << " has a value mask in its buffer that differs from its "
                                        "topology";
       ReadCompressedValues(mask, leaf_values.data(), node, entry);
-      const int64_t side = int64_t(1) << kLeafLog2;
-      for (int64_t lx = 0; lx < side; ++lx) {
-        const int64_t x = leaf.origin[0] + lx;
-        for (int64_t ly = 0; ly < side; ++ly) {
-          const int64_t y = leaf.origin[1] + ly;
-          for (int64_t lz = 0; lz < side; ++lz) {
-            const int64_t z = leaf.origin[2] + lz;
-            if (x >= dims_[0] || y >= dims_[1] || z >= dims_[2]) continue;  // inactive (checked)
-            const int n = int((lx << (2 * kLeafLog2)) | (ly << kLeafLog2) | lz);
-            data[x + dims_[0] * (y + dims_[1] * z)] = leaf_values[size_t(n)];
-          }
+      // Voxels outside the box are inactive (checked with the topology) and dropped.
+      const int side = 1 << kLeafLog2;
+      int hi[3];
+      for (int a = 0; a < 3; ++a) hi[a] = int(std::min<int64_t>(side, dims_[a] - leaf.origin[a]));
+      for (int lz = 0; lz < hi[2]; ++lz) {
+        for (int ly = 0; ly < hi[1]; ++ly) {
+          float* row = data + (leaf.origin[0] + dims_[0] * (leaf.origin[1] + ly +
+                                                             dims_[1] * (leaf.origin[2] + lz)));
+          const float* column = leaf_values.data() + (ly << kLeafLog2) + lz;
+          for (int lx = 0; lx < hi[0]; ++lx) row[lx] = column[lx << (2 * kLeafLog2)];
         }
       }
     }
