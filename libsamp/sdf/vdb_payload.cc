@@ -257,7 +257,8 @@ class GridDecoder {
     }
   }
 
-  // The tile records of a tile at `c` (side 2^log2): active tiles must lie inside the box.
+  // A tile at `c` of side 2^log2 (the root's; internal nodes check theirs
+  // before reading their values): an active one must lie inside the box.
   void AddTile(const Coord& c, int log2, float value, bool active, const char* kind) {
     if (active) {
       SAMP_CHECK(RegionInBox(c, log2))
