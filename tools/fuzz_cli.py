@@ -92,7 +92,8 @@ def reseal(data: bytes) -> bytes:
             name_size = read("I")
             name = bytes(b[pos:pos + name_size])
             pos += name_size
-            pos += read("I")  # type name
+            type_size = read("I")  # (not `pos += read(...)`: read moves pos)
+            pos += type_size
             size = read("I")
             values[name] = (pos, size)
             pos += size
