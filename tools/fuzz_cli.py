@@ -7,8 +7,11 @@ file) on N mutants of a model file and checks each run: exit status 0 or 1
 (exit 2), a sanitizer report or more peak memory than --max-rss-mb. Mutations
 (seeded): flipped bits, random bytes, runs overwritten, cut files, inserted
 and deleted bytes, edited metadata numbers (grid dims, counts), the payload
-duplicated. Findings are copied to --findings. Prints a summary line and
-exits 1 on any finding.
+duplicated. With --reseal each mutant's samp_file_bytes and
+samp_file_checksum are recomputed (when its file metadata still parses), as
+somebody editing a file on purpose would, so that the mutants reach samp's
+payload decoder instead of failing the checksum. Findings are copied to
+--findings. Prints a summary line and exits 1 on any finding.
 
   python3 tools/fuzz_cli.py --samp build/tools/samp/samp --model models/samp_cars_r5.vdb \
       --runs 20000 --jobs 2 --work /tmp/samp_fuzz_cli
@@ -18,6 +21,7 @@ import os
 import random
 import re
 import shutil
+import struct
 import subprocess
 import sys
 import tempfile
@@ -66,9 +70,55 @@ def mutate(data: bytes, rng: random.Random) -> bytes:
     return bytes(b)
 
 
+def reseal(data: bytes) -> bytes:
+    """Recomputes samp_file_bytes and samp_file_checksum (FNV-1a 64 over every
+    byte, the two values read as '0'); returns `data` unchanged when its header
+    or file metadata does not parse (docs/model_format.md, "File metadata")."""
+    b = bytearray(data)
+    pos = 8 + 4 + 4 + 4 + 1 + 36  # magic, file version, library version, offsets flag, UUID
+
+    def read(fmt):
+        nonlocal pos
+        size = struct.calcsize("<" + fmt)
+        if pos + size > len(b):
+            raise ValueError("truncated")
+        value = struct.unpack_from("<" + fmt, b, pos)[0]
+        pos += size
+        return value
+
+    try:
+        values = {}
+        for _ in range(min(read("i"), 4096)):
+            name_size = read("I")
+            name = bytes(b[pos:pos + name_size])
+            pos += name_size
+            type_size = read("I")  # (not `pos += read(...)`: read moves pos)
+            pos += type_size
+            size = read("I")
+            values[name] = (pos, size)
+            pos += size
+        size_at, size_len = values[b"samp_file_bytes"]
+        sum_at, sum_len = values[b"samp_file_checksum"]
+    except (ValueError, KeyError, struct.error):
+        return data
+    if size_len != 20 or sum_len != 16 or max(size_at + 20, sum_at + 16) > len(b):
+        return data
+    b[size_at:size_at + 20] = b"%020d" % len(b)
+    blank = bytearray(b)
+    blank[size_at:size_at + 20] = b"0" * 20
+    blank[sum_at:sum_at + 16] = b"0" * 16
+    h = 0xCBF29CE484222325
+    for c in blank:
+        h = ((h ^ c) * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
+    b[sum_at:sum_at + 16] = b"%016x" % h
+    return bytes(b)
+
+
 def run_one(args, index, data, work):
     rng = random.Random(args.seed * 1000003 + index)
     mutant = mutate(data, rng)
+    if args.reseal:
+        mutant = reseal(mutant)
     path = os.path.join(work, f"mutant_{index % (4 * args.jobs)}_{index}.vdb")
     with open(path, "wb") as f:
         f.write(mutant)
@@ -133,6 +183,8 @@ def main():
     parser.add_argument("--max-rss-mb", type=float, default=1024.0)
     parser.add_argument("--work", default=None, help="folder for the mutants (default: a temporary one)")
     parser.add_argument("--findings", default="fuzz_cli_findings")
+    parser.add_argument("--reseal", action="store_true",
+                        help="recompute each mutant's file size and checksum (mutants reach the decoder)")
     parser.add_argument("command", nargs="*", default=["inspect", "{}"],
                         help="samp arguments, {} = the mutant (default: inspect {})")
     args = parser.parse_args()

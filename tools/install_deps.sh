@@ -8,7 +8,8 @@ packages=(
   libassimp-dev libembree-dev libopenvdb-dev libboost-iostreams-dev libopenvdb-tools
   libeigen3-dev libspectra-dev libceres-dev libtbb-dev libopencv-dev
   libcli11-dev nlohmann-json3-dev libgtest-dev libgmock-dev libbenchmark-dev
-  zlib1g-dev unzip
+  # blosc and zlib: samp's own decoder of .vdb payloads (libsamp/sdf/vdb_payload.cc).
+  libblosc-dev zlib1g-dev unzip
   # The HTML viewers embed Debian's three.js at build time (docs/fitting.md, "Viewer");
   # the browser test (tests/viz/html_viewer_test.cc) opens them in headless Chromium.
   libjs-three chromium

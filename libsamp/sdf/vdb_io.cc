@@ -1,6 +1,5 @@
 #include "libsamp/sdf/vdb_io.h"
 
-#include <openvdb/io/Stream.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Dense.h>
 
@@ -12,12 +11,14 @@
 #include <fstream>
 #include <iterator>
 #include <mutex>
-#include <streambuf>
 #include <set>
 #include <sstream>
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
+#include "libsamp/sdf/byte_reader.h"
+#include "libsamp/sdf/vdb_io_testing.h"
+#include "libsamp/sdf/vdb_payload.h"
 
 namespace samp {
 namespace {
@@ -86,35 +87,12 @@ bool ParseNumbers(const std::string& text, int n, T* out) {
   return !(in >> rest);
 }
 
-// Checks that `transform` maps index space to world space as an axis-aligned
-// uniform scale plus translation, and returns its voxel size and the world
-// position of index (0,0,0).
-void DecomposeTransform(const openvdb::math::Transform& transform, const std::string& path,
-                        const std::string& grid_name, double* voxel_size, Eigen::Vector3d* origin) {
-  SAMP_CHECK(transform.isLinear()) << path << ": grid '" << grid_name
-                                   << "' has a non-linear transform";
-  const openvdb::Vec3d o = transform.indexToWorld(openvdb::Vec3d(0, 0, 0));
-  const openvdb::Vec3d ex = transform.indexToWorld(openvdb::Vec3d(1, 0, 0)) - o;
-  const openvdb::Vec3d ey = transform.indexToWorld(openvdb::Vec3d(0, 1, 0)) - o;
-  const openvdb::Vec3d ez = transform.indexToWorld(openvdb::Vec3d(0, 0, 1)) - o;
-  const double h = ex.x();
-  const double tol = 1e-9 * std::max(1.0, std::abs(h));
-  const bool axis_aligned_uniform = h > 0 && std::abs(ex.y()) < tol && std::abs(ex.z()) < tol &&
-                                    std::abs(ey.x()) < tol && std::abs(ey.y() - h) < tol &&
-                                    std::abs(ey.z()) < tol && std::abs(ez.x()) < tol &&
-                                    std::abs(ez.y()) < tol && std::abs(ez.z() - h) < tol;
-  SAMP_CHECK(axis_aligned_uniform) << path << ": grid '" << grid_name
-                                   << "' is not on an axis-aligned uniform voxel grid";
-  *voxel_size = h;
-  *origin = Eigen::Vector3d(o.x(), o.y(), o.z());
-}
-
-// ---- Bounded parsing of the parts OpenVDB would read unchecked ---------------
+// ---- samp's bounded reader ---------------------------------------------------
 //
 // OpenVDB's reader trusts every length in the file (a string length of 4 GB is
 // allocated, a negative chunk size overflows a buffer in bloscFromStream), so
-// samp reads the header, the file metadata and the grid descriptors itself and
-// verifies the file checksum before OpenVDB sees a byte.
+// samp reads every byte itself: the header, the file metadata and the grid
+// descriptors here, the grid payloads in vdb_payload.cc. OpenVDB only writes.
 
 constexpr int64_t kVdbMagic = 0x56444220;  // OPENVDB_MAGIC ("VDB ")
 constexpr uint32_t kMinFileVersion = 222;  // OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION
@@ -123,52 +101,6 @@ constexpr int32_t kMaxMetadataEntries = 4096;
 constexpr int32_t kMaxGrids = 100001;
 constexpr char kFloatTreeType[] = "Tree_float_5_4_3";
 constexpr int64_t kExpansionSlackBytes = int64_t(1) << 20;
-
-// Reads little-endian values from a byte buffer; every read is bounds-checked.
-class ByteReader {
- public:
-  ByteReader(const std::string& bytes, const std::string& path) : bytes_(bytes), path_(path) {}
-
-  size_t pos() const { return pos_; }
-  size_t size() const { return bytes_.size(); }
-  void Seek(int64_t pos, const char* what) {
-    SAMP_CHECK(pos >= 0 && uint64_t(pos) <= bytes_.size())
-        << path_ << ": " << what << " points to byte " << pos << " of a " << bytes_.size()
-        << "-byte file (truncated or corrupt)";
-    pos_ = size_t(pos);
-  }
-  template <typename T>
-  T Read(const char* what) {
-    Need(sizeof(T), what);
-    T value;
-    std::memcpy(&value, bytes_.data() + pos_, sizeof(T));
-    pos_ += sizeof(T);
-    return value;
-  }
-  // A uint32 length and that many bytes (OpenVDB's writeString).
-  std::string ReadString(const char* what) { return ReadBytes(Read<uint32_t>(what), what); }
-  std::string ReadBytes(uint64_t n, const char* what) {
-    Need(n, what);
-    std::string value = bytes_.substr(pos_, size_t(n));
-    pos_ += size_t(n);
-    return value;
-  }
-  void Skip(uint64_t n, const char* what) {
-    Need(n, what);
-    pos_ += size_t(n);
-  }
-
- private:
-  void Need(uint64_t n, const char* what) {
-    SAMP_CHECK(n <= bytes_.size() - pos_)
-        << path_ << ": truncated or corrupt file: " << what << " at byte " << pos_ << " needs "
-        << n << " bytes, " << (bytes_.size() - pos_) << " remain";
-  }
-
-  const std::string& bytes_;
-  const std::string& path_;
-  size_t pos_ = 0;
-};
 
 struct MetadataEntry {
   std::string type;
@@ -275,34 +207,22 @@ std::string Decimal20(uint64_t value) {
   return buffer;
 }
 
-// Streams a byte buffer to OpenVDB without copying it (seekable, read-only).
-class MemoryBuffer : public std::streambuf {
- public:
-  explicit MemoryBuffer(const std::string& bytes) {
-    char* begin = const_cast<char*>(bytes.data());
-    setg(begin, begin, begin + bytes.size());
-  }
-
- protected:
-  pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode which) override {
-    if (!(which & std::ios_base::in)) return pos_type(off_type(-1));
-    off_type base = dir == std::ios_base::beg ? 0 : dir == std::ios_base::cur ? gptr() - eback()
-                                                                              : egptr() - eback();
-    const off_type target = base + off;
-    if (target < 0 || target > egptr() - eback()) return pos_type(off_type(-1));
-    setg(eback(), eback() + target, egptr());
-    return pos_type(target);
-  }
-  pos_type seekpos(pos_type pos, std::ios_base::openmode which) override {
-    return seekoff(off_type(pos), std::ios_base::beg, which);
-  }
+// A grid as its descriptor and metadata describe it.
+struct GridEntry {
+  VdbGridPayloadRef payload;
+  bool has_checksum = false;
+  std::string checksum;  // samp_checksum of the dense values
 };
 
-// Everything samp checks before OpenVDB decodes a byte: the file checksum,
-// the grid descriptors, the announced sizes against the budget and file size.
-void ValidateBeforeDecoding(const std::string& bytes, const std::string& path,
-                            const VdbPrelude& prelude, const VdbReadOptions& options,
-                            VdbMetadata* meta_out, Eigen::Vector3i* dims_out) {
+// Everything samp checks before it decodes a grid: the file checksum, the grid
+// descriptors, the announced sizes against the budget and file size. Returns
+// where each grid's payload lies.
+std::vector<GridEntry> ValidateBeforeDecoding(const std::string& bytes,
+                                                      const std::string& path,
+                                                      const VdbPrelude& prelude,
+                                                      const VdbReadOptions& options,
+                                                      VdbMetadata* meta_out,
+                                                      Eigen::Vector3i* dims_out) {
   const RawMetadata& file_meta = prelude.file_meta;
   const std::string* checksum = FindString(file_meta, kFileChecksumKey);
   const std::string* file_bytes = FindString(file_meta, kFileBytesKey);
@@ -314,8 +234,7 @@ void ValidateBeforeDecoding(const std::string& bytes, const std::string& path,
                       "such files unverified: re-create it with this samp (samp train)";
     }
     SAMP_THROW() << path << ": not a samp .vdb file (no " << kFileChecksumKey
-                 << "): samp reads only files it wrote, since OpenVDB's decoder is not safe on "
-                    "unverified input";
+                 << "): samp reads only the checksummed files it writes";
   }
   SAMP_CHECK(*file_bytes == Decimal20(bytes.size()))
       << path << ": the file should be " << *file_bytes << " bytes long but is "
@@ -369,6 +288,7 @@ void ValidateBeforeDecoding(const std::string& bytes, const std::string& path,
       << path << ": the file should hold " << grid_count << " grids but has " << num_grids
       << " (truncated?)";
   std::set<std::string> names;
+  std::vector<GridEntry> entries;
   int64_t previous_end = int64_t(in.pos());
   for (int32_t g = 0; g < num_grids; ++g) {
     const std::string name = in.ReadString("grid name");
@@ -386,8 +306,18 @@ void ValidateBeforeDecoding(const std::string& bytes, const std::string& path,
                end_pos <= int64_t(bytes.size()) && grid_pos >= previous_end)
         << path << ": grid '" << name << "' has inconsistent offsets";
     in.Seek(grid_pos, "grid offset");
-    in.Read<uint32_t>("grid compression");
+    GridEntry entry;
+    VdbGridPayloadRef& ref = entry.payload;
+    ref.name = name;
+    ref.compression = in.Read<uint32_t>("grid compression");
     const RawMetadata grid_meta = ReadRawMetadata(&in, path, ("grid '" + name + "'").c_str());
+    ref.transform = in.pos();
+    ref.block = size_t(block_pos);
+    ref.end = size_t(end_pos);
+    if (const std::string* checksum = FindString(grid_meta, kChecksumKey)) {
+      entry.has_checksum = true;
+      entry.checksum = *checksum;
+    }
     // The active bounding box OpenVDB recorded (min > max: an empty grid).
     int32_t box[2][3];
     bool has_box = true;
@@ -421,7 +351,9 @@ void ValidateBeforeDecoding(const std::string& bytes, const std::string& path,
       SAMP_CHECK(n >= 0 && double(n) <= voxels)
           << path << ": grid '" << name << "' announces " << n << " active voxels, the grid has "
           << int64_t(voxels);
+      ref.announced_active_voxels = n;
     }
+    entries.push_back(std::move(entry));
     previous_end = end_pos;
     in.Seek(end_pos, "grid end offset");
   }
@@ -429,6 +361,7 @@ void ValidateBeforeDecoding(const std::string& bytes, const std::string& path,
       << path << ": " << (bytes.size() - in.pos()) << " bytes after the last grid (corrupt file)";
   *meta_out = std::move(meta);
   *dims_out = Eigen::Vector3i(int(dims[0]), int(dims[1]), int(dims[2]));
+  return entries;
 }
 
 std::string ReadWholeFile(const std::string& path, const VdbReadOptions& options) {
@@ -451,36 +384,49 @@ std::string ReadWholeFile(const std::string& path, const VdbReadOptions& options
 }
 
 std::vector<DenseGrid> ReadVdbImpl(const std::string& path, GridSpec* spec, VdbMetadata* metadata,
-                                   const VdbReadOptions& options) {
+                                   const VdbReadOptions& options,
+                                   std::vector<VdbPayloadLayout>* layouts = nullptr) {
   options.Check();
   const std::string bytes = ReadWholeFile(path, options);
   const VdbPrelude prelude = ReadPrelude(bytes, path);
   VdbMetadata meta;
   GridSpec result;
-  ValidateBeforeDecoding(bytes, path, prelude, options, &meta, &result.dims);
+  const std::vector<GridEntry> grids =
+      ValidateBeforeDecoding(bytes, path, prelude, options, &meta, &result.dims);
+  SAMP_CHECK(!grids.empty()) << path << ": the file holds no grids";
 
-  // Verified: OpenVDB decodes the bytes samp wrote, from memory (not the path,
-  // which could have changed since).
-  MemoryBuffer buffer(bytes);
-  std::istream stream(&buffer);
-  openvdb::io::Stream archive(stream, /*delayLoad=*/false);
-  openvdb::GridPtrVecPtr grids = archive.getGrids();
-  SAMP_CHECK(grids && !grids->empty()) << path << ": the file holds no grids";
-  SAMP_CHECK(int64_t(grids->size()) == std::stoll(meta.at(kGridCountKey)))
-      << path << ": OpenVDB read " << grids->size() << " grids, the file announces "
-      << meta.at(kGridCountKey);
-
-  // Grid geometry from the first grid's transform; all grids must share it.
-  const std::string first_name = (*grids)[0]->getName();
-  DecomposeTransform((*grids)[0]->transform(), path, first_name, &result.voxel_size,
-                     &result.origin);
-  for (const auto& base : *grids) {
-    SAMP_CHECK(base->isType<openvdb::FloatGrid>())
-        << path << ": grid '" << base->getName() << "' is a " << base->valueType()
-        << " grid, expected float";
-    SAMP_CHECK(base->transform() == (*grids)[0]->transform())
-        << path << ": grid '" << base->getName() << "' does not share the transform of grid '"
-        << first_name << "'";
+  // Verified: samp's bounded decoder reads the payloads from memory (not the
+  // path, which could have changed since). Grid geometry from the first
+  // grid's transform; all grids must share it exactly.
+  std::vector<DenseGrid> out;
+  out.reserve(grids.size());
+  if (layouts != nullptr) layouts->assign(grids.size(), VdbPayloadLayout());
+  VdbGridTransform first_transform;
+  for (size_t g = 0; g < grids.size(); ++g) {
+    const VdbGridPayloadRef& ref = grids[g].payload;
+    DenseGrid dense_grid;
+    dense_grid.name = ref.name;
+    VdbGridTransform transform;
+    float background = 0.0f;
+    DecodeVdbFloatGrid(bytes, path, ref, result.dims, &dense_grid.values, &transform,
+                       &background, layouts != nullptr ? &(*layouts)[g] : nullptr);
+    if (g == 0) {
+      first_transform = transform;
+      result.voxel_size = transform.voxel_size;
+      result.origin = transform.origin;
+    } else {
+      SAMP_CHECK(transform.serialized == first_transform.serialized)
+          << path << ": grid '" << ref.name << "' does not share the transform of grid '"
+          << grids[0].payload.name << "'";
+    }
+    // The per-grid checksum over the dense values (the file checksum is no
+    // signature; this one catches decoding mistakes and older corruptions).
+    if (grids[g].has_checksum) {
+      SAMP_CHECK(grids[g].checksum == Checksum(dense_grid.values, background))
+          << path << ": grid '" << dense_grid.name
+          << "' fails its checksum (truncated or corrupt file)";
+    }
+    out.push_back(std::move(dense_grid));
   }
   const auto origin_it = meta.find(kOriginKey);
   if (origin_it != meta.end()) {
@@ -497,29 +443,6 @@ std::vector<DenseGrid> ReadVdbImpl(const std::string& path, GridSpec* spec, VdbM
     result.Check();
   } catch (const Error& e) {
     SAMP_THROW() << path << ": invalid grid: " << e.what();
-  }
-
-  const openvdb::CoordBBox bbox = SpecBBox(result);
-  std::vector<DenseGrid> out;
-  out.reserve(grids->size());
-  for (const auto& base : *grids) {
-    const auto grid = openvdb::gridConstPtrCast<openvdb::FloatGrid>(base);
-    const openvdb::CoordBBox active = grid->evalActiveVoxelBoundingBox();
-    SAMP_CHECK(active.empty() || bbox.isInside(active))
-        << path << ": grid '" << grid->getName() << "' has active voxels outside the "
-        << meta.at(kDimsKey) << " grid";
-    DenseGrid dense_grid;
-    dense_grid.name = grid->getName();
-    dense_grid.values.assign(size_t(result.NumVoxels()), grid->background());
-    DenseXyz dense(bbox, dense_grid.values.data());
-    openvdb::tools::copyToDense(*grid, dense);
-    const auto checksum = grid->getMetadata<openvdb::StringMetadata>(kChecksumKey);
-    if (checksum) {
-      SAMP_CHECK(checksum->value() == Checksum(dense_grid.values, grid->background()))
-          << path << ": grid '" << dense_grid.name
-          << "' fails its checksum (truncated or corrupt file)";
-    }
-    out.push_back(std::move(dense_grid));
   }
   if (spec != nullptr) *spec = result;
   if (metadata != nullptr) *metadata = std::move(meta);
@@ -562,8 +485,12 @@ void InitializeOpenVdb() {
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
-void WriteVdb(const std::string& path, const GridSpec& spec, const std::vector<DenseGrid>& grids,
-              const VdbMetadata& metadata, float background) {
+namespace {
+
+// WriteVdb with the io::COMPRESS_* flags to store the values with.
+void WriteVdbImpl(const std::string& path, const GridSpec& spec,
+                  const std::vector<DenseGrid>& grids, const VdbMetadata& metadata,
+                  float background, uint32_t compression) {
   InitializeOpenVdb();
   spec.Check();
   SAMP_CHECK(!grids.empty()) << "WriteVdb " << path << ": no grids to write";
@@ -609,9 +536,7 @@ void WriteVdb(const std::string& path, const GridSpec& spec, const std::vector<D
   WriteFileAtomically(path, [&](const std::string& temporary) {
     try {
       openvdb::io::File file(temporary);
-      file.setCompression((openvdb::io::Archive::hasBloscCompression() ? openvdb::io::COMPRESS_BLOSC
-                                                                       : openvdb::io::COMPRESS_ZIP) |
-                          openvdb::io::COMPRESS_ACTIVE_MASK);
+      file.setCompression(compression);
       file.write(vdb_grids, file_meta);
       file.close();
       SealPayload(temporary, path);
@@ -623,6 +548,34 @@ void WriteVdb(const std::string& path, const GridSpec& spec, const std::vector<D
   });
 }
 
+}  // namespace
+
+void WriteVdb(const std::string& path, const GridSpec& spec, const std::vector<DenseGrid>& grids,
+              const VdbMetadata& metadata, float background) {
+  // The layout ReadVdb's decoder reads (vdb_payload.h): blosc when OpenVDB
+  // has it, else zip, with active-value mask compression; full floats.
+  WriteVdbImpl(path, spec, grids, metadata, background,
+               (openvdb::io::Archive::hasBloscCompression() ? openvdb::io::COMPRESS_BLOSC
+                                                            : openvdb::io::COMPRESS_ZIP) |
+                   openvdb::io::COMPRESS_ACTIVE_MASK);
+}
+
+void WriteVdbForTesting(const std::string& path, const GridSpec& spec,
+                        const std::vector<DenseGrid>& grids, const VdbMetadata& metadata,
+                        float background, VdbTestCompression compression) {
+  const uint32_t codec = compression == VdbTestCompression::kBlosc ? openvdb::io::COMPRESS_BLOSC
+                                                                   : openvdb::io::COMPRESS_ZIP;
+  WriteVdbImpl(path, spec, grids, metadata, background, codec | openvdb::io::COMPRESS_ACTIVE_MASK);
+}
+
+void ResealVdbForTesting(const std::string& path) { SealPayload(path, path); }
+
+std::vector<VdbPayloadLayout> VdbPayloadLayoutForTesting(const std::string& path) {
+  std::vector<VdbPayloadLayout> layouts;
+  ReadVdbImpl(path, nullptr, nullptr, VdbReadOptions(), &layouts);
+  return layouts;
+}
+
 void VdbReadOptions::Check() const {
   SAMP_CHECK(max_dense_bytes > 0) << "VdbReadOptions: max_dense_bytes must be > 0, got "
                                   << max_dense_bytes;
@@ -632,13 +585,10 @@ void VdbReadOptions::Check() const {
 
 std::vector<DenseGrid> ReadVdb(const std::string& path, GridSpec* spec, VdbMetadata* metadata,
                                const VdbReadOptions& options) {
-  InitializeOpenVdb();
   try {
     return ReadVdbImpl(path, spec, metadata, options);
   } catch (const Error&) {
     throw;
-  } catch (const openvdb::Exception& e) {
-    SAMP_THROW() << "cannot read " << path << " (corrupt or not a .vdb file?): " << e.what();
   } catch (const std::exception& e) {
     SAMP_THROW() << "cannot read " << path << " (corrupt or truncated .vdb file?): " << e.what();
   } catch (...) {

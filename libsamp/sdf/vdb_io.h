@@ -2,11 +2,13 @@
 // Only this layer and model/ include OpenVDB headers.
 //
 // Files written by WriteVdb carry their size and a checksum of all their bytes
-// in the file metadata. ReadVdb parses the header, the file metadata and the
-// grid descriptors itself with bounds checks, verifies size and checksum,
-// checks the announced grid sizes against a memory budget and the file size,
-// and only then hands the bytes to OpenVDB's decoder (which is not safe on
-// corrupt input). Files without the checksum (older samp files, other tools'
+// in the file metadata. OpenVDB writes the files; ReadVdb never hands a byte
+// to OpenVDB's reader (which is not safe on corrupt input): it parses the
+// header, the file metadata and the grid descriptors itself with bounds
+// checks, verifies size and checksum, checks the announced grid sizes against
+// a memory budget and the file size, and then decodes the grid payloads with
+// samp's own bounded decoder (vdb_payload.h), which accepts only the layout
+// WriteVdb writes. Files without the checksum (older samp files, other tools'
 // files) are refused. docs/model_format.md describes the layout.
 #pragma once
 

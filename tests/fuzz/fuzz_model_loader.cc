@@ -1,6 +1,7 @@
 // Fuzz target: the model file loader (ShapeModel::Load: samp's bounded parse
 // of the .vdb header, metadata and grid descriptors, the file checksum, the
-// memory budget, then OpenVDB's decoder and the model checks).
+// memory budget, then samp's own decoder of the grid payloads and the model
+// checks; libFuzzer learns to rewrite the checksum, so mutants reach the decoder).
 // Seeds: tests/fuzz/corpus/model_loader (small model files written by samp).
 #include <cstddef>
 #include <cstdint>
