@@ -208,7 +208,11 @@ class GridDecoder {
             << v[6 + 3 * f + a] << ", its scale " << scale << " makes it " << expected[f];
       }
     }
-    transform->voxel_size = scale;
+    // The voxel size as OpenVDB's index-to-world map gives it ((1 s + t) -
+    // (0 s + t) along x: 0.10000000000000009 for s = 0.1, t = -3), which is
+    // what samp read before it had its own decoder: fits and evaluations
+    // reproduce earlier runs to the last bit.
+    transform->voxel_size = (scale + v[0]) - v[0];
     transform->origin = Eigen::Vector3d(v[0], v[1], v[2]);
     transform->serialized = bytes_.substr(begin, in_.pos() - begin);
   }

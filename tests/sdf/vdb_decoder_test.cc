@@ -141,8 +141,10 @@ TEST(VdbDecoder, ShippedModelMatchesOpenVdb) {
   VdbMetadata meta;
   ReadVdb(path, &spec, &meta);
   EXPECT_EQ(meta.at("samp_grid_dims"), "61 29 29");
-  // The voxel size is the transform's scale itself, as written.
-  EXPECT_EQ(spec.voxel_size, std::stod(meta.at("samp_grid_voxel_size")));
+  // The voxel size as OpenVDB's index-to-world map gives it (the reader
+  // before samp's decoder): (0.1 + -3) - -3 = 0.10000000000000009.
+  EXPECT_EQ(spec.voxel_size, (0.1 + spec.origin.x()) - spec.origin.x());
+  EXPECT_NEAR(spec.voxel_size, std::stod(meta.at("samp_grid_voxel_size")), 1e-12);
 }
 
 TEST(VdbDecoder, WrittenGridsMatchOpenVdb) {
