@@ -316,6 +316,35 @@ double Height(const ShapeLookup& lookup, const Eigen::VectorXd& z) {
   return box.max.y() - box.min.y();
 }
 
+// The component whose +-2 sigma changes the inside box's extent along `axis`
+// (0 length, 1 height, 2 width) most.
+int ComponentChangingMost(const ShapeLookup& lookup, int axis) {
+  const int nr = lookup.num_components();
+  int component = 0;
+  double best = 0.0;
+  for (int r = 0; r < nr; ++r) {
+    Eigen::VectorXd plus = Eigen::VectorXd::Zero(nr), minus = plus;
+    plus[r] = 2.0 * lookup.sigmas()[r];
+    minus[r] = -2.0 * lookup.sigmas()[r];
+    const double change = std::abs(lookup.InsideBox(plus).Size()[axis] - lookup.InsideBox(minus).Size()[axis]);
+    if (change > best) best = change, component = r;
+  }
+  return component;
+}
+
+// Stereo noise along each point's ray (camera at the world origin): disparity
+// noise of sigma_disp px, sigma_d from the measured depth as the observations do.
+void AddDisparityNoise(double sigma_disp, std::normal_distribution<double>& n, std::mt19937& rng, TrackFrame* f) {
+  const double bf = 0.54 * 721.5;
+  for (size_t i = 0; i < f->candidate_points_in_world.size(); ++i) {
+    Eigen::Vector3d& p = f->candidate_points_in_world[i];
+    const double depth = p.z();
+    const double noisy_depth = bf / (bf / depth + sigma_disp * n(rng));
+    p *= noisy_depth / depth;
+    f->candidate_sigmas[i] = noisy_depth * noisy_depth * sigma_disp / bf;
+  }
+}
+
 TEST(Fitter, ShapesLeaveTheMeanUnderStereoNoise) {
   // Cars 2 sigma taller and shorter than the mean (along the component that
   // changes the height most), 21 frames at ~22 m with stereo noise along the
@@ -329,15 +358,7 @@ TEST(Fitter, ShapesLeaveTheMeanUnderStereoNoise) {
   // 1.51 m, 1.35 m for 1.10 m, along-ray +0.22 m; docs/fitting.md, "Known bias".)
   const ShapeLookup lookup(Model());
   const int nr = lookup.num_components();
-  int component = 0;
-  double best = 0.0;
-  for (int r = 0; r < nr; ++r) {
-    Eigen::VectorXd plus = Eigen::VectorXd::Zero(nr), minus = plus;
-    plus[r] = 2.0 * lookup.sigmas()[r];
-    minus[r] = -2.0 * lookup.sigmas()[r];
-    const double change = std::abs(Height(lookup, plus) - Height(lookup, minus));
-    if (change > best) best = change, component = r;
-  }
+  const int component = ComponentChangingMost(lookup, 1);
   const double h_mean = Height(lookup, Eigen::VectorXd::Zero(nr));
   for (const double sign : {1.0, -1.0}) {
     Eigen::VectorXd z_true = Eigen::VectorXd::Zero(nr);
@@ -348,22 +369,12 @@ TEST(Fitter, ShapesLeaveTheMeanUnderStereoNoise) {
     Synthetic s = MakeTrack(lookup, 21, 0.0, 0.0, 1200, 31, -1, &z_true, &start);
     std::mt19937 rng(32);
     std::normal_distribution<double> n(0.0, 1.0);
-    const double bf = 0.54 * 721.5, sigma_disp = 0.5;
     for (size_t k = 0; k < s.track.frames.size(); ++k) {
       TrackFrame& f = s.track.frames[k];
       testing::KeepVisible(lookup, z_true, WorldFromObject(s.poses_true[k].head<3>(), s.poses_true[k][3]),
                            Eigen::Vector3d::Zero(), &f.candidate_points_in_world, &f.candidate_sigmas);
     }
-    for (TrackFrame& f : s.track.frames) {
-      for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
-        Eigen::Vector3d& p = f.candidate_points_in_world[i];
-        const double depth = p.z();
-        const double noisy_depth = bf / (bf / depth + sigma_disp * n(rng));
-        p *= noisy_depth / depth;
-        // As the observations do: sigma_d from the measured depth.
-        f.candidate_sigmas[i] = noisy_depth * noisy_depth * sigma_disp / bf;
-      }
-    }
+    for (TrackFrame& f : s.track.frames) AddDisparityNoise(0.5, n, rng, &f);
     FitOptions options;  // defaults: ray-depth term, mixture, effective weighting (80 px)
     // The stereo evidence alone (MakeTrack's detections carry the true size).
     options.detection_size_sigma = 0.0;
@@ -402,15 +413,7 @@ TEST(Fitter, DetectedSizesMoveFarShapesTowardsTheTruth) {
   // fitted length and size are nearer the truth.
   const ShapeLookup lookup(Model());
   const int nr = lookup.num_components();
-  int component = 0;
-  double best = 0.0;
-  for (int r = 0; r < nr; ++r) {
-    Eigen::VectorXd plus = Eigen::VectorXd::Zero(nr), minus = plus;
-    plus[r] = 2.0 * lookup.sigmas()[r];
-    minus[r] = -2.0 * lookup.sigmas()[r];
-    const double change = std::abs(lookup.InsideBox(plus).Size().x() - lookup.InsideBox(minus).Size().x());
-    if (change > best) best = change, component = r;
-  }
+  const int component = ComponentChangingMost(lookup, 0);
   Eigen::VectorXd z_true = Eigen::VectorXd::Zero(nr);
   z_true[component] = 2.0 * lookup.sigmas()[component];
   const Eigen::Vector3d size_true = lookup.InsideBox(z_true).Size();
@@ -420,20 +423,13 @@ TEST(Fitter, DetectedSizesMoveFarShapesTowardsTheTruth) {
   Synthetic s = MakeTrack(lookup, 21, 0.0, 0.0, 1200, 41, -1, &z_true, &start);
   std::mt19937 rng(42);
   std::normal_distribution<double> n(0.0, 1.0);
-  const double bf = 0.54 * 721.5, sigma_disp = 0.5;
   const double rho = std::exp(-1.0 / 3.0);
   Eigen::Vector3d size_error = 0.3 * testing::DrawVector(n, rng);
   for (size_t k = 0; k < s.track.frames.size(); ++k) {
     TrackFrame& f = s.track.frames[k];
     testing::KeepVisible(lookup, z_true, WorldFromObject(s.poses_true[k].head<3>(), s.poses_true[k][3]),
                          Eigen::Vector3d::Zero(), &f.candidate_points_in_world, &f.candidate_sigmas);
-    for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
-      Eigen::Vector3d& p = f.candidate_points_in_world[i];
-      const double depth = p.z();
-      const double noisy_depth = bf / (bf / depth + sigma_disp * n(rng));
-      p *= noisy_depth / depth;
-      f.candidate_sigmas[i] = noisy_depth * noisy_depth * sigma_disp / bf;
-    }
+    AddDisparityNoise(0.5, n, rng, &f);
     if (k > 0) size_error = rho * size_error + std::sqrt(1.0 - rho * rho) * 0.3 * testing::DrawVector(n, rng);
     f.detection.length = size_true.x() + size_error.x();
     f.detection.height = size_true.y() + size_error.y();
