@@ -45,8 +45,9 @@ class ErrorBuilder {
  private:
   std::ostringstream stream_;
   std::string condition_;
-  const char* file_;
-  int line_;
+  // Used in debug builds only (Throw above).
+  [[maybe_unused]] const char* file_;
+  [[maybe_unused]] int line_;
 };
 struct ErrorThrower {
   [[noreturn]] void operator&(const ErrorBuilder& builder) const { builder.Throw(); }
