@@ -495,15 +495,23 @@ void AddDetectionSizeTerms(const ShapeLookup& lookup, const Track& track, const 
                                                                 options.detection_correlation_frames));
   // Half a sigma: wide enough to smooth the box's voxel kinks, narrow enough to stay local.
   constexpr double kStep = 0.5;
+  // Single-frame codes that are equal (all of them in the first solve, from
+  // the mean) share one linearisation: 2R + 1 box evaluations each.
+  Eigen::VectorXd linearised_code;
+  ShapeLookup::BoxSizeLinearisation lin;
+  bool have_lin = false;
   for (int c = 0; c < int(state->codes.size()); ++c) {
-    ShapeLookup::BoxSizeLinearisation lin;
-    if (!lookup.LineariseInsideBoxSize(state->codes[c], kStep, &lin)) continue;
     const int first = single ? c : 0;
     const int last = single ? c + 1 : int(track.frames.size());
     for (int k = first; k < last; ++k) {
       const ObjectLabel& d = track.frames[k].detection;
       const Eigen::Vector3d detected(d.length, d.height, d.width);  // the box's x, y, z extent
       if (!(detected.array() > 0.0).all() || !detected.allFinite()) continue;
+      if (linearised_code.size() == 0 || linearised_code != state->codes[c]) {
+        linearised_code = state->codes[c];
+        have_lin = lookup.LineariseInsideBoxSize(linearised_code, kStep, &lin);
+      }
+      if (!have_lin) continue;
       problem->AddResidualBlock(DetectionSizeCost::Create(state->codes[c], lin.size, lin.jacobian, detected,
                                                           options.detection_size_sigma, per_frame),
                                 nullptr, state->codes[c].data());
