@@ -164,8 +164,8 @@ def main():
     out.append("- Methods: **stereo** = the input disparity inside the car's segment (shape only); "
                "**detections** = the noisy input detections (pose only); **single-frame** = "
                "`samp fit --single-frame` (defaults otherwise); **full** = `samp fit` with its defaults (joint shape "
-               "and motion priors; ray-depth data term, mixture robustifier, effective-observation weighting, detected sizes: "
-               "docs/fitting.md); **full-paper** = `samp fit --data-term paper --weighting mean --huber-loss --detection-size-sigma 0` "
+               "and motion priors; ray-depth data term, mixture robustifier, effective-observation weighting, detected sizes and positions, nearest-box point claims: "
+               "docs/fitting.md); **full-paper** = `samp fit --data-term paper --weighting mean --huber-loss --detection-size-sigma 0 --no-detection-position --shared-points` "
                "(the paper's energy). Tracks: samp's tracker on the noisy detections (docs/sequence_format.md). "
                "Metrics: docs/evaluation.md.")
     per_run_time = {r: sum(v for k, v in timings.items() if k.startswith(r + "/")) for r in runs}

@@ -7,7 +7,7 @@
 #      detector's errors; docs/synthetic.md),
 #   3. fit every sequence with the full method (`samp fit` defaults: joint shape and motion,
 #      ray-depth data term, mixture robustifier, effective weighting), the paper's energy
-#      (--data-term paper --weighting mean --huber-loss --detection-size-sigma 0) and --single-frame,
+#      (--data-term paper --weighting mean --huber-loss --detection-size-sigma 0 --no-detection-position --shared-points) and --single-frame,
 #   4. evaluate against the ground truth with the raw-stereo and input-detection baselines.
 #
 # Usage: tools/run_benchmark.sh [options]
@@ -213,7 +213,7 @@ run_one() {  # run_one NAME PRESET SEED
   for seq in "$dir"/sequences/[0-9][0-9][0-9][0-9][0-9][0-9]; do seq_args+=(--seq "$seq"); done
   step "$name/fit_full" "$samp" fit --model "$model" "${seq_args[@]}" --out "$dir/fit_full" --threads "$threads" -q
   step "$name/fit_full_paper" "$samp" fit --model "$model" "${seq_args[@]}" \
-    --data-term paper --weighting mean --huber-loss --detection-size-sigma 0 --out "$dir/fit_full_paper" --threads "$threads" -q
+    --data-term paper --weighting mean --huber-loss --detection-size-sigma 0 --no-detection-position --shared-points --out "$dir/fit_full_paper" --threads "$threads" -q
   step "$name/fit_single" "$samp" fit --model "$model" "${seq_args[@]}" --single-frame \
     --out "$dir/fit_single" --threads "$threads" -q
   step "$name/eval" "$samp" eval "${seq_args[@]}" --result "full=$dir/fit_full" \

@@ -34,8 +34,21 @@ Eigen::Vector3d DetectionCenter(const ObjectLabel& detection) {
   return detection.position - Eigen::Vector3d(0, detection.height / 2, 0);
 }
 
+double SignedDistanceToBox(const ObjectLabel& detection, const Eigen::Vector3d& point_in_camera) {
+  const Eigen::Vector3d d = point_in_camera - DetectionCenter(detection);
+  const double c = std::cos(detection.rotation_y), s = std::sin(detection.rotation_y);
+  // Box axes in the camera: length along (c, 0, -s), width along (s, 0, c).
+  const Eigen::Vector3d q(std::abs(c * d.x() - s * d.z()) - detection.length / 2,
+                          std::abs(d.y()) - detection.height / 2,
+                          std::abs(s * d.x() + c * d.z()) - detection.width / 2);
+  const double outside = q.cwiseMax(0.0).norm();
+  const double inside = std::min(q.maxCoeff(), 0.0);
+  return outside + inside;
+}
+
 int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& calibration,
-                        const ObservationOptions& options, int track_id, TrackFrame* frame) {
+                        const ObservationOptions& options, int track_id, TrackFrame* frame,
+                        const std::vector<ObjectLabel>& rivals) {
   options.Check();
   SAMP_CHECK(frame != nullptr) << "ExtractObservations: frame is null";
   SAMP_CHECK(disparity_px.type() == CV_32FC1) << "ExtractObservations: expected a CV_32FC1 disparity";
@@ -80,6 +93,16 @@ int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& ca
     }
     const Eigen::Vector3d point_in_world = frame->world_from_camera * p.point_in_camera;
     if (plane.head<3>().dot(point_in_world) + plane[3] <= options.min_height_above_road) continue;
+    if (options.nearest_box_claims && !rivals.empty()) {
+      const double own = SignedDistanceToBox(detection, p.point_in_camera);
+      bool claimed = false;
+      for (const ObjectLabel& rival : rivals)
+        if (SignedDistanceToBox(rival, p.point_in_camera) < own) {
+          claimed = true;
+          break;
+        }
+      if (claimed) continue;
+    }
     points_in_world.push_back(point_in_world);
     depths.push_back(static_cast<float>(p.point_in_camera.z()));
   }

@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "libsamp/data/track.h"
 
@@ -36,6 +37,14 @@ struct ObservationOptions {
   int max_points_per_frame = 5000;
   // Seed of the subsampling; combined with the track id and frame number.
   std::uint64_t seed = 0;
+  // Occlusion and parked rows: a point that lies nearer to another detection
+  // of the same frame (signed distance to its 3D box, SignedDistanceToBox) than
+  // to this one is that car's, not this one's. Without it, the car in front
+  // of a partly hidden one lends it its rear and side, and the hidden car's
+  // fit moves towards the camera by up to the gap between the two
+  // (docs/fitting.md, "Association"). false = every track sees every point
+  // in its 2D box (the paper).
+  bool nearest_box_claims = true;
 
   void Check() const;  // throws samp::Error naming the field
 };
@@ -47,8 +56,18 @@ struct ObservationOptions {
 // frame->world_from_camera. Points are ordered by pixel (row-major) after
 // subsampling. Returns the number of points before subsampling. Does not
 // throw on an empty result (a frame may legitimately have no points).
+// `rivals` are the other detections of the same frame (same camera); with
+// options.nearest_box_claims a point nearer to one of their boxes than to
+// this detection's box is left out.
 int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& calibration,
-                        const ObservationOptions& options, int track_id, TrackFrame* frame);
+                        const ObservationOptions& options, int track_id, TrackFrame* frame,
+                        const std::vector<ObjectLabel>& rivals = {});
+
+// Signed distance of a point (camera frame of the detection) to the
+// detection's 3D box (KITTI convention: bottom centre `position`, yaw
+// rotation_y about the camera's y axis, length along the car): negative
+// inside (minus the distance to the nearest face), m.
+double SignedDistanceToBox(const ObjectLabel& detection, const Eigen::Vector3d& point_in_camera);
 
 // Plane transforms: a plane (n, d) in frame A (n . x_A + d = 0) to frame B
 // given b_from_a. Keeps n unit and pointing the same way.

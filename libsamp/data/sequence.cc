@@ -336,15 +336,20 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
     const int frame_number = work_frames[w];
     SequenceFrame frame = reader.ReadFrame(index_of_frame.at(frame_number), /*with_detections=*/false);
     const Eigen::Vector4d plane_in_world = TransformPlane(frame.plane_in_camera, frame.world_from_camera);
-    for (const auto& [t, k] : members_of_frame.at(frame_number)) {
+    const std::vector<std::pair<int, int>>& members = members_of_frame.at(frame_number);
+    for (const auto& [t, k] : members) {
+      std::vector<ObjectLabel> rivals;  // the frame's other detections (ObservationOptions::nearest_box_claims)
+      for (const auto& [t2, k2] : members)
+        if (t2 != t) rivals.push_back(linked[t2].detections[k2]);
       TrackFrame& tf = tracks[t].frames[k];
       tf.frame = frame_number;
       tf.time = frame_number / options.tracker.frame_rate_hz;
       tf.detection = linked[t].detections[k];
+      tf.detection_covariance = DetectionCovariance(tf.detection.position, options.tracker);
       tf.world_from_camera = frame.world_from_camera;
       tf.ground_plane_in_world = plane_in_world;
       totals[w] += ExtractObservations(frame.disparity_px, reader.calibration(), options.observations,
-                                       linked[t].id, &tf);
+                                       linked[t].id, &tf, rivals);
     }
     frame.disparity_px.release();
     read[w] = std::move(frame);

@@ -36,6 +36,10 @@ struct TrackFrame {
   int frame = 0;                     // frame number within the sequence
   double time = 0.0;                 // seconds (frame / 10 Hz for KITTI)
   ObjectLabel detection;             // camera frame of this frame
+  // Covariance of detection.position (camera frame, m^2) under the detector
+  // noise model (DetectionCovariance in tracking.h); zero = unknown, and the
+  // fitter then does not use the detection as a pose observation.
+  Eigen::Matrix3d detection_covariance = Eigen::Matrix3d::Zero();
   Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
   // Road plane in world coordinates: n . x + d = 0, n unit, pointing up (towards -y of the camera).
   Eigen::Vector4d ground_plane_in_world = Eigen::Vector4d(0, -1, 0, 1.65);

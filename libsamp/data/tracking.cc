@@ -123,14 +123,9 @@ double MeanAxis(const std::vector<double>& axes) {
   return mean;
 }
 
-Observation MakeObservation(const ObjectLabel& label, int frame, const Eigen::Isometry3d& world_from_camera,
-                            const GroundFrame& g, const TrackerOptions& o) {
-  Observation obs;
-  obs.frame = frame;
-  obs.time = frame / o.frame_rate_hz;
-  obs.label = label;
-  obs.label.frame = frame;
-  const Eigen::Vector3d& p = label.position;  // bottom centre, camera
+}  // namespace
+
+Eigen::Matrix3d DetectionCovariance(const Eigen::Vector3d& p, const TrackerOptions& o) {
   Eigen::Vector3d ray(p.x(), 0.0, p.z());
   const double d = ray.norm();
   ray = d > 1e-9 ? Eigen::Vector3d(ray / d) : Eigen::Vector3d::UnitZ();
@@ -139,9 +134,21 @@ Observation MakeObservation(const ObjectLabel& label, int frame, const Eigen::Is
   const double s_along = o.along_sigma_a + o.along_sigma_b * d + o.along_sigma_c * d * d;
   const double s_across = o.across_sigma_a + o.across_sigma_b * d;
   const double s_vertical = o.vertical_sigma_a + o.vertical_sigma_b * d;
-  const Eigen::Matrix3d in_camera = s_along * s_along * ray * ray.transpose() +
-                                    s_across * s_across * across * across.transpose() +
-                                    s_vertical * s_vertical * vertical * vertical.transpose();
+  return s_along * s_along * ray * ray.transpose() + s_across * s_across * across * across.transpose() +
+         s_vertical * s_vertical * vertical * vertical.transpose();
+}
+
+namespace {
+
+Observation MakeObservation(const ObjectLabel& label, int frame, const Eigen::Isometry3d& world_from_camera,
+                            const GroundFrame& g, const TrackerOptions& o) {
+  Observation obs;
+  obs.frame = frame;
+  obs.time = frame / o.frame_rate_hz;
+  obs.label = label;
+  obs.label.frame = frame;
+  const Eigen::Vector3d& p = label.position;  // bottom centre, camera
+  const Eigen::Matrix3d in_camera = DetectionCovariance(p, o);
   const Eigen::Matrix3d& r = world_from_camera.linear();
   const Eigen::Matrix3d in_world = r * in_camera * r.transpose();
   Eigen::Matrix<double, 3, 2> e;

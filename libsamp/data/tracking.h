@@ -93,6 +93,13 @@ struct TrackerOptions {
 // (core/json_fields.h; pipeline/fit_config.h owns config.json).
 void OptionFields(OptionsJson& io, TrackerOptions& o);
 
+// Covariance (m^2) of a detected box's bottom centre `position` in the camera
+// of its frame under the detector noise model of `options` (along the
+// horizontal viewing ray, across it, vertically; TrackerOptions). The tracker
+// gates with it; the fitter weighs the detections as pose observations with
+// it (TrackFrame::detection_covariance, detection_position_cost.h).
+Eigen::Matrix3d DetectionCovariance(const Eigen::Vector3d& position, const TrackerOptions& options);
+
 // The detections of one frame, in its camera, with the ego pose.
 struct FrameDetections {
   int frame = 0;

@@ -11,6 +11,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/util.h"
+#include "libsamp/fit/detection_position_cost.h"
 #include "libsamp/fit/detection_size_cost.h"
 #include "libsamp/fit/ground_cost.h"
 #include "libsamp/fit/motion_cost.h"
@@ -541,6 +542,12 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
     }
   }
   AddDetectionSizeTerms(lookup, track, options, frame_weight, state, &problem);
+  // Each frame's detected position counts its share of an independent
+  // observation (correlated detector errors; single-frame mode: once).
+  const double position_weight =
+      options.detection_position
+          ? frame_weight * (single ? 1.0 : CorrelatedObservationShare(num_frames, options.detection_correlation_frames))
+          : 0.0;
   for (int k = 0; k < num_frames; ++k) {
     const TrackFrame& f = track.frames[k];
     double* z = state->codes[single ? k : 0].data();
@@ -562,6 +569,13 @@ SolveReport Solve(const ShapeLookup& lookup, const Track& track,
     }
     problem.AddResidualBlock(GroundCost::Create(f.ground_plane_in_world, options.sigma_ground, frame_weight),
                              nullptr, pose);
+    if (position_weight > 0.0 && f.detection_covariance.determinant() > 0.0) {
+      const Eigen::Matrix3d& r = f.world_from_camera.linear();
+      problem.AddResidualBlock(DetectionPositionCost::Create(f.world_from_camera * f.detection.position,
+                                                             r * f.detection_covariance * r.transpose(),
+                                                             position_weight),
+                               nullptr, pose);
+    }
     // One frame (T = 1): no motion term and no velocities; the joint problem
     // is then the single-frame problem.
     if (single || num_frames == 1) continue;

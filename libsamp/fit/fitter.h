@@ -88,6 +88,12 @@ struct FitOptions {
   // stereo 3D detector's ~0.3 m (issue 11's detector model; the tracker's
   // TrackerOptions::size_sigma).
   double detection_size_sigma = 0.3;
+  // The detections' box positions as observations of the poses
+  // (docs/fitting.md, "Detected position"; detection_position_cost.h), with
+  // the detector noise model's covariance (TrackFrame::detection_covariance:
+  // the tracker's --tracker-*-sigma) and the correlation below; false = off
+  // (the paper: detections only initialise the fit).
+  bool detection_position = true;
   // A detector errs the same way for a few frames: consecutive detections'
   // errors correlate as exp(-1 / tau), tau = this many frames (0 = white), so a
   // track's T detections count T (1 - rho) / (1 + rho) independent ones

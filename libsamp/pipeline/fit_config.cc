@@ -40,6 +40,7 @@ void OptionFields(OptionsJson& io, ObservationOptions& o) {
   io("sigma_disparity_px", o.sigma_disparity_px);
   io("max_points_per_frame", o.max_points_per_frame);
   io("seed", o.seed);
+  io("nearest_box_claims", o.nearest_box_claims);
 }
 
 void OptionFields(OptionsJson& io, SequenceOptions& o) {
@@ -85,6 +86,7 @@ void OptionFields(OptionsJson& io, FitOptions& o) {
   io("shape_prior_weight", o.shape_prior_weight);
   io("detection_size_sigma", o.detection_size_sigma);
   io("detection_correlation_frames", o.detection_correlation_frames);
+  io("detection_position", o.detection_position);
   io("standing_speed", o.standing_speed);
   io("straight_yaw_rate", o.straight_yaw_rate);
   io("max_motion_off_axis", o.max_motion_off_axis);

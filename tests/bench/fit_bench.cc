@@ -12,6 +12,7 @@
 //                             (0 = all 5,000 points of a frame in every solve;
 //                             250 = the default)
 //   BM_FitWithoutDetectedSize  the default fit with --detection-size-sigma 0
+//   BM_FitWithoutDetectedPosition  the default fit with --no-detection-position
 //   BM_FitLinearSolver/<solver>  the single solve with other linear solvers
 //   BM_FitAutodiffPerPoint       the same single solve with one autodiff
 //                                cost block per point (for comparison)
@@ -27,6 +28,7 @@
 #include <vector>
 
 #include "libsamp/core/log.h"
+#include "libsamp/data/tracking.h"
 #include "libsamp/fit/fitter.h"
 #include "libsamp/fit/ground_cost.h"
 #include "libsamp/fit/motion_cost.h"
@@ -43,8 +45,16 @@ constexpr int kPointsPerFrame = 5000;
 struct Fixture {
   ShapeModel model = testing::MakeSyntheticModel(5, 0.1);
   ShapeLookup lookup{model};
-  testing::Synthetic synthetic =
-      testing::MakeTrack(lookup, kFrames, 8.0, 0.3, kPointsPerFrame * 20 / 21, 21);
+  testing::Synthetic synthetic = WithDetectionCovariances(
+      testing::MakeTrack(lookup, kFrames, 8.0, 0.3, kPointsPerFrame * 20 / 21, 21));
+
+  // As the sequence reader fills them: the detector model's covariances, so
+  // that the default fit includes the detected-position term.
+  static testing::Synthetic WithDetectionCovariances(testing::Synthetic s) {
+    for (TrackFrame& tf : s.track.frames)
+      tf.detection_covariance = DetectionCovariance(tf.detection.position, TrackerOptions());
+    return s;
+  }
 };
 
 const Fixture& GetFixture() {
@@ -90,6 +100,7 @@ void BM_Fit(benchmark::State& state) {
     options.data_weighting = DataWeighting::kMean;
     options.mixture_loss = false;
     options.detection_size_sigma = 0.0;
+    options.detection_position = false;
   }
   RunFit(state, options);
 }
@@ -120,6 +131,14 @@ void BM_FitWithoutDetectedSize(benchmark::State& state) {
   RunFit(state, options);
 }
 BENCHMARK(BM_FitWithoutDetectedSize)->Unit(benchmark::kMillisecond);
+
+// The default fit (with the EM pass) without the detected-position term.
+void BM_FitWithoutDetectedPosition(benchmark::State& state) {
+  FitOptions options;
+  options.detection_position = false;
+  RunFit(state, options);
+}
+BENCHMARK(BM_FitWithoutDetectedPosition)->Unit(benchmark::kMillisecond);
 
 void BM_FitLinearSolver(benchmark::State& state) {
   FitOptions options;

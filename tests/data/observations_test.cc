@@ -159,6 +159,56 @@ TEST(ObservationsTest, DistanceGateAndRoadFilter) {
   EXPECT_TRUE(frame.candidate_points_in_world.empty());
 }
 
+TEST(ObservationsTest, SignedDistanceToBox) {
+  ObjectLabel d;
+  d.height = 1.5;
+  d.width = 2.0;
+  d.length = 4.0;
+  d.position = Eigen::Vector3d(1, 1.6, 20);  // centre (1, 0.85, 20)
+  d.rotation_y = 0.0;                        // length along the camera's x
+  EXPECT_NEAR(SignedDistanceToBox(d, Eigen::Vector3d(1, 0.85, 20)), -0.75, 1e-12);  // half the height
+  EXPECT_NEAR(SignedDistanceToBox(d, Eigen::Vector3d(3.5, 0.85, 20)), 0.5, 1e-12);  // beyond the front
+  EXPECT_NEAR(SignedDistanceToBox(d, Eigen::Vector3d(1, 0.85, 21.5)), 0.5, 1e-12);  // beside it
+  EXPECT_NEAR(SignedDistanceToBox(d, Eigen::Vector3d(4, 0.85, 22)), std::sqrt(1.0 + 1.0), 1e-12);  // corner
+  // Turned by 90 degrees the length runs along the camera's z.
+  d.rotation_y = M_PI / 2;
+  EXPECT_NEAR(SignedDistanceToBox(d, Eigen::Vector3d(1, 0.85, 22.5)), 0.5, 1e-9);
+  EXPECT_NEAR(SignedDistanceToBox(d, Eigen::Vector3d(2.5, 0.85, 20)), 0.5, 1e-9);
+}
+
+TEST(ObservationsTest, NearerBoxesClaimTheirPoints) {
+  const StereoCalibration c = Calibration();
+  const cv::Mat disparity = SceneDisparity(c);
+  ObservationOptions options;
+  options.max_points_per_frame = 0;
+  TrackFrame frame = CarFrame(c, Eigen::Isometry3d::Identity());
+  const int alone = ExtractObservations(disparity, c, options, 0, &frame);
+  ASSERT_GT(alone, 1000);
+  // A hidden car's detection 3 m behind the face: the box car in front (the
+  // face is its rear) claims the face, so the hidden car keeps none of it ...
+  TrackFrame hidden = frame;
+  hidden.detection.position.z() += 3.0;
+  const ObjectLabel front = frame.detection;
+  EXPECT_GT(ExtractObservations(disparity, c, options, 1, &hidden), 0);
+  EXPECT_EQ(ExtractObservations(disparity, c, options, 1, &hidden, {front}), 0);
+  // ... while the car in front keeps all of it, and so does a car without
+  // rivals or with the claims off (the paper).
+  EXPECT_EQ(ExtractObservations(disparity, c, options, 0, &frame, {hidden.detection}), alone);
+  options.nearest_box_claims = false;
+  EXPECT_GT(ExtractObservations(disparity, c, options, 1, &hidden, {front}), 0);
+  // A neighbour's (noisy) box overlapping the car's right quarter, the face
+  // 0.3 m deep inside it, claims that quarter: the points nearer its box.
+  options.nearest_box_claims = true;
+  ObjectLabel right = frame.detection;
+  right.position.x() += 1.5;
+  right.position.z() -= 0.3;
+  const int shared = ExtractObservations(disparity, c, options, 0, &frame, {right});
+  EXPECT_LT(shared, alone);
+  EXPECT_GT(shared, alone / 2);
+  for (const Eigen::Vector3d& p : frame.candidate_points_in_world)
+    ASSERT_LE(SignedDistanceToBox(frame.detection, p), SignedDistanceToBox(right, p));
+}
+
 TEST(ObservationsTest, SubsamplingIsBoundedAndSeeded) {
   const StereoCalibration c = Calibration();
   const cv::Mat disparity = SceneDisparity(c);

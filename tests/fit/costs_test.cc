@@ -10,6 +10,8 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/data/tracking.h"
+#include "libsamp/fit/detection_position_cost.h"
 #include "libsamp/fit/detection_size_cost.h"
 #include "libsamp/fit/ground_cost.h"
 #include "libsamp/fit/motion_cost.h"
@@ -619,6 +621,38 @@ TEST(GroundCost, ResidualAndJacobian) {
   const double height = unit_plane.head<3>().dot(Eigen::Vector3d(1.0, 1.2, 10.0)) + unit_plane[3];
   EXPECT_NEAR(r, std::sqrt(0.5) * height / 0.1, 1e-12);
   ExpectJacobiansMatch(cost, {pose}, 1e-7, "ground");
+}
+
+TEST(DetectionPositionCost, ResidualAndJacobian) {
+  // The detector noise model's covariance of a box 30 m away, 25 deg off the
+  // optical axis, turned into a world frame yawed by 0.3 rad.
+  const Eigen::Vector3d in_camera(30 * std::sin(0.44), 1.6, 30 * std::cos(0.44));
+  const Eigen::Matrix3d cov_camera = DetectionCovariance(in_camera, TrackerOptions());
+  const Eigen::Matrix3d r = Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d cov = r * cov_camera * r.transpose();
+  const Eigen::Vector3d detected = r * in_camera + Eigen::Vector3d(2, 0, -1);
+  // Along the horizontal ray the model's sigma is 0.25 + 0.015 * 30 m = 0.70 m.
+  const Eigen::Vector3d ray = Eigen::Vector3d(in_camera.x(), 0, in_camera.z()).normalized();
+  EXPECT_NEAR(std::sqrt(ray.dot(cov_camera * ray)), 0.25 + 0.015 * 30.0, 1e-9);
+  DetectionPositionCost cost(detected, cov, 0.4);
+  double pose[4] = {detected.x() + 0.5, detected.y() - 0.1, detected.z() + 0.7, 1.1};
+  double res[3];
+  const double* params[1] = {pose};
+  ASSERT_TRUE(cost.Evaluate(params, res, nullptr));
+  const Eigen::Vector3d d(0.5, -0.1, 0.7);
+  // |r|^2 = w (t - p)^T Sigma^-1 (t - p); the yaw does not enter.
+  EXPECT_NEAR(Eigen::Map<Eigen::Vector3d>(res).squaredNorm(), 0.4 * d.dot(cov.inverse() * d), 1e-9);
+  ExpectJacobiansMatch(cost, {pose}, 1e-7, "detection position");
+  // A step along the ray costs less than the same step across it.
+  double along[4] = {detected.x(), detected.y(), detected.z(), 0}, across[4] = {detected.x(), detected.y(), detected.z(), 0};
+  const Eigen::Vector3d ray_world = r * ray, across_world = r * Eigen::Vector3d(ray.z(), 0, -ray.x());
+  for (int a = 0; a < 3; ++a) along[a] += 0.5 * ray_world[a], across[a] += 0.5 * across_world[a];
+  double r_along[3], r_across[3];
+  const double* p_along[1] = {along};
+  const double* p_across[1] = {across};
+  ASSERT_TRUE(cost.Evaluate(p_along, r_along, nullptr));
+  ASSERT_TRUE(cost.Evaluate(p_across, r_across, nullptr));
+  EXPECT_LT(Eigen::Map<Eigen::Vector3d>(r_along).norm(), 0.5 * Eigen::Map<Eigen::Vector3d>(r_across).norm());
 }
 
 TEST(ShapePriorCost, ResidualAndJacobian) {

@@ -161,6 +161,10 @@ void RegisterFitCommand(CLI::App* app) {
                       "width (docs/fitting.md, \"Detected size\"), m; 0 = off (the paper)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  command->add_flag("!--no-detection-position", o.fit.detection_position,
+                    "Do not use the detections' box positions as observations of the poses (the paper: they only "
+                    "initialise the fit); default: each counts with the tracker's detector noise model "
+                    "(--tracker-*-sigma, docs/fitting.md, \"Detected position\")");
   command->add_option("--detection-correlation", o.fit.detection_correlation_frames,
                       "Frames over which the detector's errors are correlated (exp(-1/tau)); 0 = independent")
       ->capture_default_str()
@@ -181,6 +185,9 @@ void RegisterFitCommand(CLI::App* app) {
                       "Disparity noise for sigma_d = d^2 sigma / (b f), px")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  command->add_flag("!--shared-points", o.sequence.observations.nearest_box_claims,
+                    "Every track keeps every point of its 2D box (the paper); default: a point nearer to another "
+                    "detection's 3D box of the same frame is that car's (docs/fitting.md, \"Association\")");
   command->add_option("--max-points", o.sequence.observations.max_points_per_frame,
                       "At most this many candidate points per frame (seeded subsample; 0 = all)")
       ->capture_default_str()
