@@ -458,6 +458,36 @@ TEST(Fitter, DetectedSizesMoveFarShapesTowardsTheTruth) {
   // benchmark the far origins did improve, docs/fitting.md "Detected size".)
 }
 
+// The detected positions observe the poses (detection_position_cost.h): a
+// track whose detections all lie 0.6 m beside the car fits beside it when
+// their covariance is tight, on the car when the term is off or the track
+// carries no covariance (hand-made tracks, --no-detection-position).
+TEST(Fitter, DetectedPositionsObserveThePoses) {
+  FitOptions options;
+  TrackFitter fitter(Model(), options);
+  Synthetic s = MakeTrack(fitter.lookup(), 6, 0.0, 0.0, 300, 21);
+  const Eigen::Vector3d shift(0.6, 0.0, 0.0);
+  for (TrackFrame& f : s.track.frames) f.detection.position += shift;
+  auto mean_offset = [&](const TrackFit& fit) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    for (size_t k = 0; k < fit.frames.size(); ++k) sum += fit.frames[k].position - s.poses_true[k].head<3>();
+    return Eigen::Vector3d(sum / double(fit.frames.size()));
+  };
+  // No covariance: the stereo points place the car.
+  const Eigen::Vector3d without = mean_offset(fitter.Fit(s.track));
+  EXPECT_LT(without.norm(), 0.1) << without.transpose();
+  // A detector far more precise than the points (0.01 m): the detections win.
+  Track tight = s.track;
+  for (TrackFrame& f : tight.frames) f.detection_covariance = 1e-4 * Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d with = mean_offset(fitter.Fit(tight));
+  EXPECT_GT(with.x(), 0.45) << with.transpose();
+  EXPECT_LT((with - shift).norm(), 0.15) << with.transpose();
+  // Off: the covariance is ignored.
+  options.detection_position = false;
+  const Eigen::Vector3d off = mean_offset(TrackFitter(Model(), options).Fit(tight));
+  EXPECT_LT((off - without).norm(), 1e-6) << off.transpose();
+}
+
 TEST(Fitter, OneFrameTrackInJointModeIsTheSingleFrameProblem) {
   // T = 1: no motion term, weights 1/T = 1, so the joint fit and the
   // single-frame fit solve the same problem.
