@@ -649,7 +649,7 @@ Scene MakeStreetScene(const SynthOptions& options, const std::vector<SynthCar>& 
     }
   }
 
-  // Traffic: standing (waiting), straight, turning by the shares, near/far alternating.
+  // Traffic: standing (waiting), straight, turning by the shares, near/far by the realised near share.
   const double split = std::clamp(20.0, options.min_distance, options.max_distance);
   for (int k = 0; k < options.cars_per_sequence; ++k) {
     const int g = (*global_car_index)++;
@@ -660,7 +660,10 @@ Scene MakeStreetScene(const SynthOptions& options, const std::vector<SynthCar>& 
     const MotionType motion = u < options.standing_share ? MotionType::kStanding
                               : u < options.standing_share + options.turning_share ? MotionType::kTurning
                                                                                    : MotionType::kStraight;
-    const bool near = ((g / 2) % 2) == 0;
+    // Near while the realised near share of the sequence's cars (parked and traffic) is short of near_share.
+    int placed_near = 0;
+    for (const SceneCar& other : scene.cars) placed_near += other.target_distance < split ? 1 : 0;
+    const bool near = placed_near < options.near_share * double(scene.cars.size() + 1) - 1e-9;
     const double lo = near ? options.min_distance : split;
     const double hi = near ? split : options.max_distance;
     bool placed = PlaceStreetCar(options, motion, lo, hi, scene, &rng, &car);
@@ -1291,6 +1294,7 @@ void SynthOptions::Check() const {
       << "synth: invalid_fraction and outlier_fraction must be >= 0 with sum <= 1";
   SAMP_CHECK(parked_cars_per_sequence >= 0 && parked_cars_per_sequence <= 12)
       << "synth: parked_cars_per_sequence must be in [0, 12]";
+  SAMP_CHECK(near_share >= 0 && near_share <= 1) << "synth: near_share must lie in [0, 1]";
   SAMP_CHECK(standing_share >= 0 && turning_share >= 0 && standing_share + turning_share <= 1)
       << "synth: standing_share and turning_share must be >= 0 with sum <= 1";
   SAMP_CHECK(ego_pitch_sway_deg >= 0 && ego_roll_sway_deg >= 0 && ego_bounce >= 0 && ego_max_pitch_offset_deg >= 0)
@@ -1341,6 +1345,7 @@ std::string SynthOptions::ToJson() const {
       {"outlier_fraction", outlier_fraction},
       {"scene", scene == SynthScene::kStreet ? "street" : "clean"},
       {"parked_cars_per_sequence", parked_cars_per_sequence},
+      {"near_share", near_share},
       {"standing_share", standing_share},
       {"turning_share", turning_share},
       {"ego_pitch_sway_deg", ego_pitch_sway_deg},

@@ -94,6 +94,10 @@ struct SynthOptions {
 
   // Distance of each car to the camera at the middle frame, metres (stratified near/far).
   double min_distance = 5.0, max_distance = 45.0;
+  // Street: the share of a sequence's cars (parked and traffic) nearer than 20 m
+  // at the middle frame. Each traffic car is drawn near (min_distance-20 m) while
+  // the sequence's realised near share is below it, else far (20 m-max_distance).
+  double near_share = 0.5;
   // Straight speeds, m/s (urban: 11-47 km/h).
   double min_speed = 3.0, max_speed = 13.0;
   // Turning: speeds and absolute yaw rates (rad/s).

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iterator>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "libsamp/core/error.h"
@@ -245,6 +246,39 @@ TEST(Synth, RenderedCarHasWheelsOnTheRoad) {
   fs::remove_all(root);
 }
 
+// --near-share decides how many of a street sequence's cars lie nearer than
+// 20 m at the middle frame (traffic cars fill the share the parked rows leave).
+double NearShareOfCars(double near_share, const std::string& root) {
+  SynthOptions options = test::QuickSynthOptions(root, 23);
+  options.num_sequences = 4;
+  options.num_frames = 3;
+  options.cars_per_sequence = 3;
+  options.parked_cars_per_sequence = 0;
+  options.max_distance = 40.0;
+  options.near_share = near_share;
+  const SynthSummary summary = SynthesizeSequences(options, TestCars());
+  int cars = 0, near = 0;
+  for (const SynthSequenceInfo& s : summary.sequences) {
+    std::ifstream in(s.folder + "/gt/cars.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    for (const nlohmann::json& car : j.at("cars")) {
+      ++cars;
+      near += car.at("distance_at_middle_frame").get<double>() < 20.0 ? 1 : 0;
+    }
+  }
+  fs::remove_all(root);
+  EXPECT_GE(cars, 8);
+  return cars > 0 ? double(near) / cars : 0.0;
+}
+
+TEST(Synth, NearShareSetsTheDistances) {
+  EXPECT_GE(NearShareOfCars(1.0, test::MakeTempFolder("synth_near_all")), 0.75);
+  EXPECT_LE(NearShareOfCars(0.0, test::MakeTempFolder("synth_near_none")), 0.25);
+  const double half = NearShareOfCars(0.5, test::MakeTempFolder("synth_near_half"));
+  EXPECT_GE(half, 0.3);
+  EXPECT_LE(half, 0.7);
+}
+
 TEST(Synth, RejectsBadOptions) {
   SynthOptions options = test::QuickSynthOptions("/nonexistent/never", 1);
   options.num_frames = 0;
@@ -256,6 +290,9 @@ TEST(Synth, RejectsBadOptions) {
   options.window_interior_albedo = -0.1;
   EXPECT_THROW(options.Check(), Error);
   options.window_interior_albedo = 0.6;
+  EXPECT_THROW(options.Check(), Error);
+  options = test::QuickSynthOptions("/nonexistent/never", 1);
+  options.near_share = 1.5;
   EXPECT_THROW(options.Check(), Error);
   EXPECT_THROW(SynthesizeSequences(test::QuickSynthOptions("/nonexistent/never", 1), {}), Error);
 }
