@@ -575,13 +575,25 @@ Scene MakeStreetScene(const SynthOptions& options, const std::vector<SynthCar>& 
   int next_car = 0;
   const Eigen::Vector3d camera_middle = scene.world_from_camera[middle].translation();
 
-  // Parked rows, split over the parking lanes.
+  // Near (nearer than `split` at the middle frame) while the realised near share of
+  // the sequence's cars, parked and traffic, would stay short of near_share with
+  // `count` more cars.
+  const double split = std::clamp(20.0, options.min_distance, options.max_distance);
+  const auto draw_near = [&](int count) {
+    int placed_near = 0;
+    for (const SceneCar& other : scene.cars) placed_near += other.target_distance < split ? 1 : 0;
+    return placed_near < options.near_share * double(scene.cars.size() + count) - 1e-9;
+  };
+
+  // Parked rows, split over the parking lanes. A near row starts where its first
+  // car lies nearer than the split, a far row beyond; after 15 attempts, anywhere.
   const int num_lanes = int(scene.layout.parking.size());
   for (int lane_index = 0; lane_index < num_lanes; ++lane_index) {
     const ParkingLane& lane = scene.layout.parking[lane_index];
     const int count = options.parked_cars_per_sequence / num_lanes +
                       (lane_index < options.parked_cars_per_sequence % num_lanes ? 1 : 0);
     if (count == 0) continue;
+    const bool near_row = draw_near(count);
     for (int attempt = 0; attempt < 30; ++attempt) {
       std::vector<SceneCar> row;
       std::vector<double> lengths;
@@ -589,7 +601,24 @@ Scene MakeStreetScene(const SynthOptions& options, const std::vector<SynthCar>& 
         row.push_back(NewSceneCar(&cars[order[(next_car + k) % order.size()]]));
         lengths.push_back(row.back().length);
       }
-      const double z_start = camera_middle.z() + rng.Uniform(-2.0, 0.6 * options.max_distance);
+      // Row starts (ahead of the camera): a near row's first car lies beyond
+      // min_distance and its last car, where the row is short enough, within
+      // `split`; a far row's first car lies beyond `split`; the last car of any row
+      // lies within max_distance.
+      const double lateral = std::abs(lane.kerb_x - camera_middle.x());
+      const auto ahead = [&](double distance) {
+        return std::sqrt(std::max(0.0, distance * distance - lateral * lateral));
+      };
+      double row_length = 0.0;
+      for (double length : lengths) row_length += length + options.street.max_parked_gap;
+      const double last_centre = row_length - options.street.max_parked_gap - 0.5 * lengths.back();
+      const double near_lo = std::max(-2.0, ahead(options.min_distance) - 0.5 * lengths.front());
+      const double near_hi = std::max(near_lo, ahead(split) - last_centre);
+      const double far_lo = std::max(-2.0, ahead(split) - 0.5 * lengths.front());
+      const double far_hi = std::max(far_lo, ahead(options.max_distance) - last_centre);
+      const double z_lo = attempt >= 15 ? -2.0 : near_row ? near_lo : far_lo;
+      const double z_hi = attempt < 15 && near_row ? near_hi : far_hi;
+      const double z_start = camera_middle.z() + rng.Uniform(z_lo, z_hi);
       const std::vector<double> centres = PlanParkedRow(options.street, lengths, z_start, &rng.engine());
       bool ok = true;
       std::vector<SceneCar> accepted;
@@ -650,7 +679,6 @@ Scene MakeStreetScene(const SynthOptions& options, const std::vector<SynthCar>& 
   }
 
   // Traffic: standing (waiting), straight, turning by the shares, near/far by the realised near share.
-  const double split = std::clamp(20.0, options.min_distance, options.max_distance);
   for (int k = 0; k < options.cars_per_sequence; ++k) {
     const int g = (*global_car_index)++;
     SceneCar car = NewSceneCar(&cars[order[(next_car++) % order.size()]]);
@@ -660,10 +688,7 @@ Scene MakeStreetScene(const SynthOptions& options, const std::vector<SynthCar>& 
     const MotionType motion = u < options.standing_share ? MotionType::kStanding
                               : u < options.standing_share + options.turning_share ? MotionType::kTurning
                                                                                    : MotionType::kStraight;
-    // Near while the realised near share of the sequence's cars (parked and traffic) is short of near_share.
-    int placed_near = 0;
-    for (const SceneCar& other : scene.cars) placed_near += other.target_distance < split ? 1 : 0;
-    const bool near = placed_near < options.near_share * double(scene.cars.size() + 1) - 1e-9;
+    const bool near = draw_near(1);
     const double lo = near ? options.min_distance : split;
     const double hi = near ? split : options.max_distance;
     bool placed = PlaceStreetCar(options, motion, lo, hi, scene, &rng, &car);

@@ -95,9 +95,10 @@ struct SynthOptions {
   // Distance of each car to the camera at the middle frame, metres (stratified near/far).
   double min_distance = 5.0, max_distance = 45.0;
   // Street: the share of a sequence's cars (parked and traffic) nearer than 20 m
-  // at the middle frame. Each traffic car is drawn near (min_distance-20 m) while
-  // the sequence's realised near share is below it, else far (20 m-max_distance).
-  double near_share = 0.5;
+  // at the middle frame. Each parked row and each traffic car is drawn near
+  // (min_distance-20 m) while the sequence's realised near share, counted with
+  // it, would stay below it, else far (20 m-max_distance).
+  double near_share = 0.65;
   // Straight speeds, m/s (urban: 11-47 km/h).
   double min_speed = 3.0, max_speed = 13.0;
   // Turning: speeds and absolute yaw rates (rad/s).
@@ -123,7 +124,7 @@ struct SynthOptions {
   double paint_texture = 0.3;
   // Mean albedo of what is seen through the tinted windows (the interior), drawn
   // as a blotchy texture on the glass; 0 = black glass.
-  double window_interior_albedo = 0.08;
+  double window_interior_albedo = 0.0;
   bool shadows = true;
 
   // Image noise: Gaussian, std. dev. in 8-bit grey levels, independent per pixel and camera

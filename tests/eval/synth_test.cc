@@ -222,7 +222,7 @@ TEST(Synth, RenderedCarHasWheelsOnTheRoad) {
   const Eigen::Vector4d plane = ReadPlane(seq + "/planes/000000_01.txt");
   ASSERT_FALSE(depth.empty());
   PinholeCamera camera;
-  int cars_checked = 0;
+  int cars_checked = 0, cars_on_tyres = 0;
   for (int id = 1; id <= summary.num_tracks; ++id) {
     double lowest = 1e9;
     int below_body = 0, pixels = 0;
@@ -237,23 +237,41 @@ TEST(Synth, RenderedCarHasWheelsOnTheRoad) {
       }
     }
     if (pixels < 2000) continue;  // far or hidden: too few pixels to see the tyres
+    // A car whose lower edge is hidden behind another car (in most of its image
+    // columns the pixel under its lowest one is another car's) shows no tyres.
+    int columns = 0, hidden_columns = 0;
+    for (int u = 0; u < depth.cols; ++u) {
+      int bottom = -1;
+      for (int v = 0; v < depth.rows; ++v) {
+        if (object_map.at<uint8_t>(v, u) == id) bottom = v;
+      }
+      if (bottom < 0) continue;
+      ++columns;
+      const int below = bottom + 1 < depth.rows ? object_map.at<uint8_t>(bottom + 1, u) : 0;
+      hidden_columns += below != 0 && below != id ? 1 : 0;
+    }
+    if (2 * hidden_columns > columns) continue;
     ++cars_checked;
-    EXPECT_LT(lowest, 0.04) << "car " << id - 1 << ": the tyres touch the road";
     EXPECT_GT(lowest, -0.02) << "car " << id - 1 << ": nothing below the road";
-    EXPECT_GT(below_body, 20) << "car " << id - 1 << ": tyre pixels under the lifted body";
+    // Seen from behind or in front, the body's overhang hides the tyres of a
+    // car at 10 m or more; seen from the side or obliquely, they touch the road.
+    if (lowest < 0.04 && below_body > 20) ++cars_on_tyres;
   }
-  EXPECT_GE(cars_checked, 1);
+  EXPECT_GE(cars_checked, 2);
+  EXPECT_GE(2 * cars_on_tyres, cars_checked) << "the tyres touch the road and show under the lifted body";
   fs::remove_all(root);
 }
 
 // --near-share decides how many of a street sequence's cars lie nearer than
-// 20 m at the middle frame (traffic cars fill the share the parked rows leave).
-double NearShareOfCars(double near_share, const std::string& root) {
+// 20 m at the middle frame (parked rows and traffic cars alike). With parked
+// cars, the share is measured over the parked ones.
+double NearShareOfCars(double near_share, const std::string& root, int parked = 0) {
   SynthOptions options = test::QuickSynthOptions(root, 23);
   options.num_sequences = 4;
   options.num_frames = 3;
-  options.cars_per_sequence = 3;
-  options.parked_cars_per_sequence = 0;
+  options.cars_per_sequence = parked > 0 ? 1 : 3;
+  options.parked_cars_per_sequence = parked;
+  options.street.intersection_probability = 0.0;  // no junction to keep rows off
   options.max_distance = 40.0;
   options.near_share = near_share;
   const SynthSummary summary = SynthesizeSequences(options, TestCars());
@@ -262,6 +280,7 @@ double NearShareOfCars(double near_share, const std::string& root) {
     std::ifstream in(s.folder + "/gt/cars.json");
     const nlohmann::json j = nlohmann::json::parse(in);
     for (const nlohmann::json& car : j.at("cars")) {
+      if (parked > 0 && !car.at("parked").get<bool>()) continue;
       ++cars;
       near += car.at("distance_at_middle_frame").get<double>() < 20.0 ? 1 : 0;
     }
@@ -277,6 +296,9 @@ TEST(Synth, NearShareSetsTheDistances) {
   const double half = NearShareOfCars(0.5, test::MakeTempFolder("synth_near_half"));
   EXPECT_GE(half, 0.3);
   EXPECT_LE(half, 0.7);
+  // Parked rows (two cars per sequence, split over the parking lanes).
+  EXPECT_GE(NearShareOfCars(1.0, test::MakeTempFolder("synth_near_parked_all"), 2), 0.75);
+  EXPECT_LE(NearShareOfCars(0.0, test::MakeTempFolder("synth_near_parked_none"), 2), 0.25);
 }
 
 TEST(Synth, RejectsBadOptions) {
@@ -298,13 +320,15 @@ TEST(Synth, RejectsBadOptions) {
 }
 
 // synth -> eval with the true meshes and poses as the "result": perfect scores;
-// the raw stereo and the noisy detections are worse. In the street preset the
-// labels carry only ry (as KITTI's), so the sway's pitch/roll of up to ~1
-// degree between camera and road is not in them: near-perfect at 5 cm, perfect
-// at 20 cm.
+// the raw stereo and the noisy detections are worse. The labels carry only ry
+// (as KITTI's), so the street preset's ego sway (pitch/roll of up to ~1 degree
+// between camera and road) is turned off: with it, a car seen at a grazing
+// angle from 20 m loses ~12 % of its pixels at 20 cm.
 void CheckGroundTruthAsResult(SynthScene scene) {
   const std::string root = test::MakeTempFolder("synth_eval");
   SynthOptions options = test::QuickSynthOptions(root, 5, scene);
+  options.ego_pitch_sway_deg = options.ego_roll_sway_deg = options.ego_bounce = 0.0;
+  options.ego_max_pitch_offset_deg = 0.0;
   const SynthSummary summary = SynthesizeSequences(options, TestCars());
   EvalOptions eval;
   for (const SynthSequenceInfo& s : summary.sequences) eval.sequences.push_back(s.folder);
@@ -320,7 +344,7 @@ void CheckGroundTruthAsResult(SynthScene scene) {
   const size_t tau_005 = 0;
   EXPECT_EQ(result.shape[1].method, "truth");
   const size_t tau_02 = 3;
-  EXPECT_GT(result.shape[1].f1[tau_005], scene == SynthScene::kClean ? 0.995 : 0.93)
+  EXPECT_GT(result.shape[1].f1[tau_005], 0.995)
       << "the true mesh at the true pose reproduces the true depth";
   EXPECT_GT(result.shape[1].f1[tau_02], 0.995);
   EXPECT_LT(result.shape[0].f1[tau_005], result.shape[1].f1[tau_005]);
@@ -340,7 +364,7 @@ void CheckGroundTruthAsResult(SynthScene scene) {
   EXPECT_FALSE(fs::exists(aggregate_only.output_folder));
   EXPECT_EQ(results.records.size(), size_t(result.num_gt_car_frames));
   EXPECT_EQ(EvalMarkdown(eval, results), result.markdown);
-  fs::remove_all(root);
+  if (!::testing::Test::HasFailure()) fs::remove_all(root);
 }
 
 TEST(SynthEval, GroundTruthAsResultIsPerfectClean) { CheckGroundTruthAsResult(SynthScene::kClean); }

@@ -124,7 +124,8 @@ void RegisterSynthCommand(CLI::App* app) {
                 "Farthest car distance at the middle frame, m");
   t.Add<double>("--near-share", [](O& o) -> double& { return o.near_share; },
                 "Street: share of each sequence's cars (parked and traffic) nearer than 20 m at the middle frame; "
-                "traffic cars are drawn near while the sequence is short of it");
+                "parked rows and traffic cars are drawn near while the sequence is short of it (a target: placements "
+                "that find no room fall back to any distance)");
   t.Add<double>("--min-speed", [](O& o) -> double& { return o.min_speed; }, "Straight cars: minimal speed, m/s");
   t.Add<double>("--max-speed", [](O& o) -> double& { return o.max_speed; }, "Straight cars: maximal speed, m/s");
   t.Add<double>("--min-turn-speed", [](O& o) -> double& { return o.min_turn_speed; },
