@@ -585,8 +585,7 @@ Scene MakeStreetScene(const SynthOptions& options, const std::vector<SynthCar>& 
     return placed_near < options.near_share * double(scene.cars.size() + count) - 1e-9;
   };
 
-  // Parked rows, split over the parking lanes. A near row starts where its first
-  // car lies nearer than the split, a far row beyond; after 15 attempts, anywhere.
+  // Parked rows, split over the parking lanes, near or far by draw_near.
   const int num_lanes = int(scene.layout.parking.size());
   for (int lane_index = 0; lane_index < num_lanes; ++lane_index) {
     const ParkingLane& lane = scene.layout.parking[lane_index];
