@@ -6,11 +6,11 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/core/pose.h"
 
 namespace samp {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 // Plane through the inliers' centroid with the normal of least variance,
 // oriented up (n.y < 0).

@@ -10,6 +10,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_fields.h"
+#include "libsamp/core/pose.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/observations.h"
 
@@ -67,7 +68,6 @@ std::vector<int> HungarianRowsLeCols(const std::vector<double>& cost, int rows, 
   return col_of_row;
 }
 
-constexpr double kPi = 3.14159265358979323846;
 
 using Matrix4d = Eigen::Matrix4d;
 using Vector4d = Eigen::Vector4d;

@@ -15,23 +15,6 @@ const char* MotionModelName(MotionModel model) {
   return "unknown";
 }
 
-double WrapAngle(double angle) {
-  double a = std::remainder(angle, 2.0 * M_PI);  // [-pi, pi]
-  if (a <= -M_PI) a += 2.0 * M_PI;
-  return a;
-}
-
-Eigen::Isometry3d WorldFromObject(const Eigen::Vector3d& translation, double yaw) {
-  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
-  t.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()).toRotationMatrix();
-  t.translation() = translation;
-  return t;
-}
-
-Eigen::Isometry3d ObjectFromWorld(const Eigen::Vector3d& translation, double yaw) {
-  return WorldFromObject(translation, yaw).inverse();
-}
-
 void MotionNoise::Check() const {
   auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
   auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };

@@ -24,22 +24,14 @@
 #include <Eigen/Geometry>
 #include <string>
 
+#include "libsamp/core/pose.h"
+
 namespace samp {
 
 enum class MotionModel { kStanding = 0, kStraight = 1, kArc = 2 };
 const char* MotionModelName(MotionModel model);
 
-// Angle wrapped to (-pi, pi].
-double WrapAngle(double angle);
-
-// Heading of yaw theta in the world: (cos theta, 0, -sin theta).
-inline Eigen::Vector3d Heading(double yaw) { return Eigen::Vector3d(std::cos(yaw), 0.0, -std::sin(yaw)); }
-// Yaw of a direction (its projection on the x-z plane).
-inline double YawOfDirection(const Eigen::Vector3d& d) { return std::atan2(-d.z(), d.x()); }
-
-// world_from_object of pose (t, theta), and its inverse.
-Eigen::Isometry3d WorldFromObject(const Eigen::Vector3d& translation, double yaw);
-Eigen::Isometry3d ObjectFromWorld(const Eigen::Vector3d& translation, double yaw);
+// WrapAngle, Heading, YawOfDirection, WorldFromObject and ObjectFromWorld: core/pose.h.
 
 struct MotionNoise {
   // Velocity noise per second (random walk): sigma_v = speed_noise * sqrt(dt), m/s;
