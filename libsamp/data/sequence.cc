@@ -247,6 +247,95 @@ std::string SequenceSummary::BriefReport() const {
   return s.str();
 }
 
+namespace {
+
+// The detections linked into tracks: by the tracker (options.tracker, its
+// min_track_length capped at the number of frames) or read from
+// options.tracking_labels_path. `indices` are the reader's frame indices in
+// the range, index_of_frame their inverse.
+std::vector<LinkedTrack> LinkSequenceTracks(const std::string& directory, const SequenceReader& reader,
+                                            const SequenceOptions& options, const std::vector<int>& indices,
+                                            const std::map<int, int>& index_of_frame, SequenceSummary* result) {
+  const SequenceFiles& files = reader.files();
+  // A track cannot be longer than the sequence: in a sequence of fewer frames
+  // than min_track_length (e.g. one KITTI stereo frame) tracks of every frame
+  // are kept.
+  TrackerOptions tracker = options.tracker;
+  if (tracker.min_track_length > result->num_frames) {
+    tracker.min_track_length = result->num_frames;
+    result->messages.push_back(files.name + ": " + std::to_string(result->num_frames) +
+                               " frame(s), fewer than min_track_length " +
+                               std::to_string(options.tracker.min_track_length) +
+                               ": tracks of " + std::to_string(result->num_frames) + " frame(s) kept");
+  }
+  if (options.tracking_labels_path.empty()) {
+    std::vector<FrameDetections> detections;
+    for (int i : indices) {
+      FrameDetections fd;
+      fd.frame = files.frames[i].frame;
+      fd.world_from_camera = reader.WorldFromCamera(fd.frame);
+      fd.detections = reader.ReadDetections(i);
+      detections.push_back(std::move(fd));
+    }
+    return LinkDetections(detections, tracker, &result->tracking);
+  }
+  std::vector<ObjectLabel> labels;
+  for (const ObjectLabel& label : ReadTrackingLabels(options.tracking_labels_path)) {
+    if (!TypeKept(label.type, options) || label.score < options.min_detection_score) continue;
+    if (!FrameInRange(label.frame, options)) continue;
+    SAMP_CHECK(index_of_frame.count(label.frame) > 0)
+        << options.tracking_labels_path << ": track " << label.track_id << " has a label in frame "
+        << label.frame << ", which sequence " << directory << " does not have";
+    labels.push_back(label);
+  }
+  result->tracks_from_labels = true;
+  return TracksFromLabels(labels, tracker.min_track_length, &result->tracking);
+}
+
+// The track frames of every linked track with their candidate points
+// (ExtractObservations): frames are read in parallel, each task filling only
+// its own TrackFrame slots; a point nearer to another detection of its frame
+// is that one's (ObservationOptions::nearest_box_claims). Returns the frames
+// read (disparity released) for the summary.
+std::vector<SequenceFrame> FillTrackFrames(const SequenceReader& reader, const SequenceOptions& options,
+                                           const std::vector<LinkedTrack>& linked,
+                                           const std::map<int, int>& index_of_frame, std::vector<Track>* tracks) {
+  // Which (track, detection) pairs each frame serves.
+  std::map<int, std::vector<std::pair<int, int>>> members_of_frame;  // frame -> (track, k)
+  for (int t = 0; t < static_cast<int>(linked.size()); ++t)
+    for (int k = 0; k < static_cast<int>(linked[t].detections.size()); ++k)
+      members_of_frame[linked[t].detections[k].frame].push_back({t, k});
+  std::vector<int> work_frames;
+  for (const auto& [frame, members] : members_of_frame) work_frames.push_back(frame);
+
+  std::vector<SequenceFrame> read(work_frames.size());
+  tbb::parallel_for(size_t(0), work_frames.size(), [&](size_t w) {
+    const int frame_number = work_frames[w];
+    SequenceFrame frame = reader.ReadFrame(index_of_frame.at(frame_number), /*with_detections=*/false);
+    const Eigen::Vector4d plane_in_world = TransformPlane(frame.plane_in_camera, frame.world_from_camera);
+    const std::vector<std::pair<int, int>>& members = members_of_frame.at(frame_number);
+    for (const auto& [t, k] : members) {
+      std::vector<ObjectLabel> rivals;  // the frame's other detections
+      for (const auto& [t2, k2] : members)
+        if (t2 != t) rivals.push_back(linked[t2].detections[k2]);
+      TrackFrame& tf = (*tracks)[t].frames[k];
+      tf.frame = frame_number;
+      tf.time = frame_number / options.tracker.frame_rate_hz;
+      tf.detection = linked[t].detections[k];
+      tf.detection_covariance = DetectionCovariance(tf.detection.position, options.tracker);
+      tf.world_from_camera = frame.world_from_camera;
+      tf.ground_plane_in_world = plane_in_world;
+      ExtractObservations(frame.disparity_px, reader.calibration(), options.observations, linked[t].id, &tf,
+                          rivals);
+    }
+    frame.disparity_px.release();
+    read[w] = std::move(frame);
+  });
+  return read;
+}
+
+}  // namespace
+
 std::vector<Track> LoadSequenceTracks(const std::string& directory, const SequenceOptions& options,
                                       SequenceSummary* summary) {
   options.Check();
@@ -269,56 +358,14 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
   SAMP_CHECK(!indices.empty()) << "sequence " << directory << ": no frames in the range ["
                                << options.first_frame << ", " << options.last_frame << "]";
   result.num_frames = static_cast<int>(indices.size());
-
-  // A track cannot be longer than the sequence: in a sequence of fewer frames
-  // than min_track_length (e.g. one KITTI stereo frame) tracks of every frame
-  // are kept.
-  TrackerOptions tracker = options.tracker;
-  if (tracker.min_track_length > result.num_frames) {
-    tracker.min_track_length = result.num_frames;
-    result.messages.push_back(files.name + ": " + std::to_string(result.num_frames) +
-                              " frame(s), fewer than min_track_length " +
-                              std::to_string(options.tracker.min_track_length) +
-                              ": tracks of " + std::to_string(result.num_frames) + " frame(s) kept");
-  }
-  std::vector<LinkedTrack> linked;
-  if (options.tracking_labels_path.empty()) {
-    std::vector<FrameDetections> detections;
-    for (int i : indices) {
-      FrameDetections fd;
-      fd.frame = files.frames[i].frame;
-      fd.world_from_camera = reader.WorldFromCamera(fd.frame);
-      fd.detections = reader.ReadDetections(i);
-      detections.push_back(std::move(fd));
-    }
-    linked = LinkDetections(detections, tracker, &result.tracking);
-  } else {
-    std::vector<ObjectLabel> labels;
-    for (const ObjectLabel& label : ReadTrackingLabels(options.tracking_labels_path)) {
-      if (!TypeKept(label.type, options) || label.score < options.min_detection_score) continue;
-      if (!FrameInRange(label.frame, options)) continue;
-      SAMP_CHECK(index_of_frame.count(label.frame) > 0)
-          << options.tracking_labels_path << ": track " << label.track_id << " has a label in frame "
-          << label.frame << ", which sequence " << directory << " does not have";
-      labels.push_back(label);
-    }
-    linked = TracksFromLabels(labels, tracker.min_track_length, &result.tracking);
-    result.tracks_from_labels = true;
-  }
+  const std::vector<LinkedTrack> linked =
+      LinkSequenceTracks(directory, reader, options, indices, index_of_frame, &result);
   if (result.tracking.num_short_tracks > 0)
     LogInfo() << files.name << ": " << result.tracking.BriefReport();
   for (const std::string& warning : result.tracking.warnings) {
     LogWarning() << files.name << ": " << warning;
     result.messages.push_back(files.name + ": " + warning);
   }
-
-  // Which (track, detection) pairs each frame serves.
-  std::map<int, std::vector<std::pair<int, int>>> members_of_frame;  // frame -> (track, k)
-  for (int t = 0; t < static_cast<int>(linked.size()); ++t)
-    for (int k = 0; k < static_cast<int>(linked[t].detections.size()); ++k)
-      members_of_frame[linked[t].detections[k].frame].push_back({t, k});
-  std::vector<int> work_frames;
-  for (const auto& [frame, members] : members_of_frame) work_frames.push_back(frame);
 
   std::vector<Track> tracks(linked.size());
   for (size_t t = 0; t < linked.size(); ++t) {
@@ -328,34 +375,7 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
     tracks[t].calibration = reader.calibration();
     tracks[t].frames.resize(linked[t].detections.size());
   }
-  std::vector<SequenceFrame> read(work_frames.size());
-  std::vector<int> totals(work_frames.size(), 0);
-  // Frames are independent: read and extract in parallel; each task writes
-  // only its own TrackFrame slots.
-  tbb::parallel_for(size_t(0), work_frames.size(), [&](size_t w) {
-    const int frame_number = work_frames[w];
-    SequenceFrame frame = reader.ReadFrame(index_of_frame.at(frame_number), /*with_detections=*/false);
-    const Eigen::Vector4d plane_in_world = TransformPlane(frame.plane_in_camera, frame.world_from_camera);
-    const std::vector<std::pair<int, int>>& members = members_of_frame.at(frame_number);
-    for (const auto& [t, k] : members) {
-      std::vector<ObjectLabel> rivals;  // the frame's other detections (ObservationOptions::nearest_box_claims)
-      for (const auto& [t2, k2] : members)
-        if (t2 != t) rivals.push_back(linked[t2].detections[k2]);
-      TrackFrame& tf = tracks[t].frames[k];
-      tf.frame = frame_number;
-      tf.time = frame_number / options.tracker.frame_rate_hz;
-      tf.detection = linked[t].detections[k];
-      tf.detection_covariance = DetectionCovariance(tf.detection.position, options.tracker);
-      tf.world_from_camera = frame.world_from_camera;
-      tf.ground_plane_in_world = plane_in_world;
-      totals[w] += ExtractObservations(frame.disparity_px, reader.calibration(), options.observations,
-                                       linked[t].id, &tf, rivals);
-    }
-    frame.disparity_px.release();
-    read[w] = std::move(frame);
-  });
-
-  for (const SequenceFrame& frame : read) {
+  for (const SequenceFrame& frame : FillTrackFrames(reader, options, linked, index_of_frame, &tracks)) {
     result.frames_with_estimated_plane += frame.plane_estimated ? 1 : 0;
     result.frames_with_computed_disparity += frame.disparity_computed ? 1 : 0;
     result.frames_plane_estimation_failed += frame.plane_estimation_failed ? 1 : 0;

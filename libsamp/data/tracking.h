@@ -34,8 +34,8 @@ struct TrackerOptions {
   // horizontal viewing ray along_sigma_a + along_sigma_b d + along_sigma_c d^2,
   // across it across_sigma_a + across_sigma_b d, vertically vertical_sigma_a +
   // vertical_sigma_b d. Defaults: a stereo 3D detector (median position error
-  // ~0.35 m below 20 m, ~0.6 m beyond 40 m, vertical 0.2-0.3 m; issue 11's
-  // detector model, docs/synthetic.md).
+  // ~0.35 m below 20 m, ~0.6 m beyond 40 m, vertical 0.2-0.3 m; the
+  // synthetic detector model, docs/synthetic.md).
   double along_sigma_a = 0.25, along_sigma_b = 0.015, along_sigma_c = 0.0;
   double across_sigma_a = 0.1, across_sigma_b = 0.005;
   double vertical_sigma_a = 0.2, vertical_sigma_b = 0.002;
@@ -97,7 +97,7 @@ void OptionFields(OptionsJson& io, TrackerOptions& o);
 // of its frame under the detector noise model of `options` (along the
 // horizontal viewing ray, across it, vertically; TrackerOptions). The tracker
 // gates with it; the fitter weighs the detections as pose observations with
-// it (TrackFrame::detection_covariance, detection_position_cost.h).
+// it (TrackFrame::detection_covariance, fit/costs/detection_position.h).
 Eigen::Matrix3d DetectionCovariance(const Eigen::Vector3d& position, const TrackerOptions& options);
 
 // The detections of one frame, in its camera, with the ego pose.

@@ -218,7 +218,7 @@ TEST_F(SequenceTest, EndToEnd) {
       EXPECT_LT(outside[outside.size() * 95 / 100], 0.02);
     }
     for (size_t k = 0; k < f.candidate_sigmas.size(); ++k) {
-      const double z = f.candidate_depths[k];
+      const double z = 0.54 * 350 / f.candidate_disparities_px[k];
       ASSERT_NEAR(f.candidate_sigmas[k], z * z / (0.54 * 350), 1e-6);
     }
   }
@@ -370,7 +370,8 @@ TEST(RealKittiTest, FindsTheCarsPoints) {
   const TrackFrame& f = tracks[0].frames[0];
   EXPECT_EQ(f.frame, 10);
   ASSERT_GT(f.candidate_points_in_world.size(), 1000u);
-  std::vector<float> depths = f.candidate_depths;
+  std::vector<float> depths;
+  for (float d : f.candidate_disparities_px) depths.push_back(float(tracks[0].calibration.baseline * tracks[0].calibration.camera.fx / d));
   std::sort(depths.begin(), depths.end());
   const float median = depths[depths.size() / 2];
   EXPECT_GT(median, 12.0f);
