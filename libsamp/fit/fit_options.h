@@ -7,7 +7,7 @@
 #include <string>
 
 #include "libsamp/fit/motion_model.h"
-#include "libsamp/fit/sdf_cost.h"
+#include "libsamp/fit/costs/data_cost.h"
 
 namespace samp {
 
@@ -42,13 +42,14 @@ struct FitOptions {
   // in docs/fitting.md ("Points per solve").
   int max_solve_points_per_frame = 250;
   // Data blocks compressed to R + 5 residuals with the same cost, gradient and
-  // Gauss-Newton matrix (CompressedSdfCost; much faster); false = N residuals.
+  // Gauss-Newton matrix (CompressedDataCost; much faster); false = N residuals.
   bool compress_data_blocks = true;
-  // Data term (sdf_cost.h): kRayDepth (default) = the distance along each
-  // point's viewing ray to the shape's surface ("--ray-depth-inside", with
-  // the mixture robustifier below); kPaper = phi at the point (SAMP);
-  // kDisparity compares each point's disparity with that of the shape's
-  // visible surface on its ray (robust mixture). Measured on the realistic
+  // Data term (costs/): kRayDepth (default; costs/ray_depth.h) = the
+  // distance along each point's viewing ray to the shape's surface, with the
+  // mixture robustifier below; kPaper = phi at the point (SAMP;
+  // costs/point_sdf.h); kDisparity (costs/disparity.h) compares each point's
+  // disparity with that of the shape's visible surface on its ray (robust
+  // mixture). Measured on the realistic
   // street benchmark in docs/fitting.md ("Choosing the defaults").
   DataTerm data_term = DataTerm::kRayDepth;
   // How a frame's data term is weighted against the priors (docs/fitting.md,
@@ -64,7 +65,7 @@ struct FitOptions {
   // Huber threshold of the kPaper / kRayDepth data terms, in units of sigma_d.
   double huber_threshold = 1.0;
   // kPaper / kRayDepth: the mixture robustifier (threshold outlier_threshold)
-  // instead of Huber (SdfCostOptions::mixture_loss).
+  // instead of Huber (DataCostOptions::mixture_loss).
   bool mixture_loss = true;
   // kDisparity: silhouette uncertainty of rays that miss the shape, px; the
   // inlier/outlier threshold s_0 of the mixture, in sigma (also the EM gate).
@@ -75,13 +76,13 @@ struct FitOptions {
   // Weight lambda of the shape prior lambda sum (z_i / sigma_i)^2.
   double shape_prior_weight = 1.0;
   // The detections' box sizes as observations of the shape (docs/fitting.md,
-  // "Detected size"; detection_size_cost.h): std. dev. of a detected length,
+  // "Detected size"; costs/detection_size.h): std. dev. of a detected length,
   // height and width, m (0 = the term is off, as in the paper). Default: a
-  // stereo 3D detector's ~0.3 m (issue 11's detector model; the tracker's
-  // TrackerOptions::size_sigma).
+  // stereo 3D detector's ~0.3 m (the synthetic detector model's,
+  // docs/synthetic.md; the tracker's TrackerOptions::size_sigma).
   double detection_size_sigma = 0.3;
   // The detections' box positions as observations of the poses
-  // (docs/fitting.md, "Detected position"; detection_position_cost.h), with
+  // (docs/fitting.md, "Detected position"; costs/detection_position.h), with
   // the detector noise model's covariance (TrackFrame::detection_covariance:
   // the tracker's --tracker-*-sigma) and the correlation below; false = off
   // (the paper: detections only initialise the fit).
@@ -89,7 +90,8 @@ struct FitOptions {
   // A detector errs the same way for a few frames: consecutive detections'
   // errors correlate as exp(-1 / tau), tau = this many frames (0 = white), so a
   // track's T detections count T (1 - rho) / (1 + rho) independent ones
-  // (an AR(1) mean). Default: the 3 frames of issue 11's detector model.
+  // (an AR(1) mean). Default: the 3 frames of the synthetic detector model
+  // (docs/synthetic.md).
   double detection_correlation_frames = 3.0;
   // Motion-model thresholds: |v| < standing_speed -> standing (m/s);
   // |omega| < straight_yaw_rate -> straight line (rad/s), else circular arc.

@@ -13,8 +13,7 @@
 
 #include "libsamp/core/mesh.h"
 #include "libsamp/fit/fit_options.h"
-#include "libsamp/fit/motion_model.h"
-#include "libsamp/fit/sdf_cost.h"
+#include "libsamp/fit/initialization.h"
 #include "libsamp/model/shape_lookup.h"
 #include "libsamp/data/track.h"
 
@@ -96,17 +95,7 @@ class TrackFitter {
  private:
   ShapeLookup lookup_;
   FitOptions options_;
+  ceres::LinearSolverType linear_solver_;  // options_.linear_solver, checked once
 };
-
-// Initial states of a track (paper Section 3.4), exposed for tests: poses
-// from the detections projected onto the road plane, speed and yaw rate from
-// the median of successive detections, yaw from the detections (standing) or
-// the first-to-last segment (moving), 180-degree detection flips resolved.
-struct InitialState {
-  std::vector<Eigen::Vector4d> poses;      // (tx, ty, tz, theta)
-  std::vector<Eigen::Vector2d> velocities; // (v, omega)
-  bool standing = false;
-};
-InitialState InitializeTrack(const Track& track, const FitOptions& options);
 
 }  // namespace samp

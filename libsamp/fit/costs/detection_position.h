@@ -1,5 +1,5 @@
-// The detector's box position as an observation of the pose (docs/fitting.md,
-// "Detected position"): a 3D detector measures each car's bottom centre p_det
+// The detector's box position as an observation of the pose (samp addition,
+// not in the paper; docs/fitting.md, "Detected position"): a 3D detector measures each car's bottom centre p_det
 // with covariance Sigma (world frame; TrackFrame::detection_covariance, the
 // detector noise model the tracker gates with), so
 //   E_position = w * (t - p_det)^T Sigma^-1 (t - p_det),

@@ -1,7 +1,7 @@
-// The detector's box size as an observation of the shape (docs/fitting.md,
-// "Detected size"): a 3D detector measures each car's length, height and
-// width with an error of std. dev. sigma (a stereo detector: ~0.3 m, issue 11's
-// detector model), so
+// The detector's box size as an observation of the shape (samp addition, not
+// in the paper; docs/fitting.md, "Detected size"): a 3D detector measures each
+// car's length, height and width with an error of std. dev. sigma (a stereo
+// detector: ~0.3 m, the synthetic detector model's), so
 //   E_size = w * || (s(z) - s_det) / sigma ||^2,
 // s(z) the (length, height, width) of the shape's inside box, linearised about
 // the code z0 of the solve (ShapeLookup::LineariseInsideBoxSize):

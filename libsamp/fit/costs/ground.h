@@ -1,5 +1,6 @@
-// Ground-plane prior of one frame: the car's origin (bottom centre) lies on
-// that frame's road plane n . x + d = 0 (world, n unit):
+// Ground-plane prior of one frame (the paper's E_ground in its energy E): the
+// car's origin (bottom centre) lies on that frame's road plane n . x + d = 0
+// (world, n unit):
 //   E_ground = w * ((n . t + d) / sigma_ground)^2,  residual = sqrt(w) (n . t + d) / sigma_ground,
 //   d residual / d(t, theta) = sqrt(w) / sigma_ground * (n^T, 0).
 // Parameter block: pose (tx, ty, tz, theta).

@@ -1,4 +1,4 @@
-// Motion term between consecutive frames of a track (SAMP Section 3.3):
+// Motion term between consecutive frames of a track (SAMP Section 3.3, E_motion):
 //   E_motion = w * || xi_t - g(xi_{t-1}) ||^2_Sigma,
 //   e = (t_t - g_t, wrap(theta_t - g_theta), v_t - g_v, omega_t - g_omega),
 //   residual = sqrt(w) L e,  L^T L = Sigma^-1 (L upper triangular),

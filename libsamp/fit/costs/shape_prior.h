@@ -1,4 +1,4 @@
-// Shape prior of the PCA manifold: E_shape = lambda * sum_i (z_i / sigma_i)^2,
+// Shape prior of the PCA manifold (the paper's E_shape in its energy E): E_shape = lambda * sum_i (z_i / sigma_i)^2,
 // sigma_i^2 the eigenvalues; residual_i = sqrt(lambda) z_i / sigma_i,
 // d residual_i / d z_j = sqrt(lambda) / sigma_i if i == j else 0.
 // Parameter block: z (R values).
