@@ -23,41 +23,60 @@ struct View {
   std::vector<Eigen::Isometry3d> object_from_world;  // per car, of this frame
 };
 
-// The surface points and normals (world frame) of the hit pixels; zero elsewhere.
-void SurfaceSamples(const ShadingPreset& preset, const Eigen::Isometry3d& world_from_camera,
-                    const PinholeCamera& camera, const RenderBuffers& buffers, std::vector<Eigen::Vector3d>* points,
-                    std::vector<Eigen::Vector3d>* normals) {
-  const size_t num_pixels = size_t(camera.width) * camera.height;
-  points->assign(num_pixels, Eigen::Vector3d::Zero());
-  normals->assign(num_pixels, Eigen::Vector3d::Zero());
-  const bool world = preset.buffers == ShadingPreset::BufferFrame::kWorld;
-  const Eigen::Matrix3d rotation = world_from_camera.linear();
-  tbb::parallel_for(0, camera.height, [&](int v) {
-    for (int u = 0; u < camera.width; ++u) {
-      const size_t pixel = size_t(v) * camera.width + u;
-      if (buffers.mesh_index[pixel] < 0) continue;
-      const Eigen::Vector3d point = world_from_camera * (camera.Ray(u, v) * double(buffers.depth[pixel]));
-      (*points)[pixel] = world ? Eigen::Vector3d(point.cast<float>().cast<double>()) : point;
-      (*normals)[pixel] = world ? Eigen::Vector3d(buffers.normal[pixel].cast<double>())
-                                : Eigen::Vector3d(rotation * buffers.normal[pixel].cast<double>());
-    }
-  });
-}
-
-// 1 where the sun is seen from the surface point (everywhere without shadows).
-std::vector<uint8_t> SunVisibility(const ShadingPreset& preset, const Scene& scene, const EmbreeScene* embree,
-                                   const std::vector<Eigen::Vector3d>& points,
-                                   const std::vector<Eigen::Vector3d>& normals) {
-  if (!preset.shadows) return std::vector<uint8_t>(points.size(), 1);
-  SAMP_CHECK(embree != nullptr && preset.buffers == ShadingPreset::BufferFrame::kWorld)
-      << "synth: shadows need the world-frame scene";
-  std::vector<Eigen::Vector3f> points_f(points.size()), normals_f(normals.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    points_f[i] = points[i].cast<float>();
-    normals_f[i] = normals[i].cast<float>();
+// The surface point and normal (world frame) of a hit pixel. kWorld: kept in
+// float for every pixel (zero normal where nothing was hit), as the shadow
+// rays take them, and shaded at exactly those values; kCamera: computed per
+// pixel in double.
+class SurfaceSamples {
+ public:
+  SurfaceSamples(const ShadingPreset& preset, const Eigen::Isometry3d& world_from_camera,
+                 const PinholeCamera& camera, const RenderBuffers& buffers)
+      : world_(preset.buffers == ShadingPreset::BufferFrame::kWorld),
+        world_from_camera_(world_from_camera),
+        rotation_(world_from_camera.linear()),
+        camera_(camera),
+        buffers_(buffers) {
+    if (!world_) return;
+    const size_t num_pixels = size_t(camera.width) * camera.height;
+    points_.resize(num_pixels);
+    normals_.assign(num_pixels, Eigen::Vector3f::Zero());
+    tbb::parallel_for(0, camera.height, [&](int v) {
+      for (int u = 0; u < camera.width; ++u) {
+        const size_t pixel = size_t(v) * camera.width + u;
+        if (buffers.mesh_index[pixel] < 0) continue;
+        points_[pixel] = (world_from_camera * (camera.Ray(u, v) * double(buffers.depth[pixel]))).cast<float>();
+        normals_[pixel] = buffers.normal[pixel];
+      }
+    });
   }
-  return LightVisibility(*embree, points_f, normals_f, scene.lighting.to_sun.cast<float>(), 0.01f);
-}
+
+  void At(int u, int v, Eigen::Vector3d* point, Eigen::Vector3d* normal) const {
+    const size_t pixel = size_t(v) * camera_.width + u;
+    if (world_) {
+      *point = points_[pixel].cast<double>();
+      *normal = normals_[pixel].cast<double>();
+    } else {
+      *point = world_from_camera_ * (camera_.Ray(u, v) * double(buffers_.depth[pixel]));
+      *normal = rotation_ * buffers_.normal[pixel].cast<double>();
+    }
+  }
+
+  // 1 where the sun is seen from the surface point (everywhere without shadows).
+  std::vector<uint8_t> SunVisibility(const ShadingPreset& preset, const Scene& scene,
+                                     const EmbreeScene* embree) const {
+    if (!preset.shadows) return std::vector<uint8_t>(size_t(camera_.width) * camera_.height, 1);
+    SAMP_CHECK(embree != nullptr && world_) << "synth: shadows need the world-frame scene";
+    return LightVisibility(*embree, points_, normals_, scene.lighting.to_sun.cast<float>(), 0.01f);
+  }
+
+ private:
+  bool world_;
+  const Eigen::Isometry3d& world_from_camera_;
+  const Eigen::Matrix3d rotation_;
+  const PinholeCamera& camera_;
+  const RenderBuffers& buffers_;
+  std::vector<Eigen::Vector3f> points_, normals_;  // kWorld only
+};
 
 // kPlain: flat paint; tyres, bumpers and underbody dark below 0.30 m; dark windows.
 SurfaceMaterial PlainCarMaterial(const SceneCar& car, const Eigen::Vector3d& p_object,
@@ -223,9 +242,8 @@ cv::Mat ShadeView(const ShadingPreset& preset, const SynthOptions& options, cons
                   const RenderBuffers& buffers, const EmbreeScene* embree, uint64_t noise_seed) {
   View view{preset, options, scene, int(scene.statics.size()), {}};
   for (const SceneCar& car : scene.cars) view.object_from_world.push_back(WorldFromObject(car.states[frame]).inverse());
-  std::vector<Eigen::Vector3d> points, normals;
-  SurfaceSamples(preset, world_from_camera, camera, buffers, &points, &normals);
-  const std::vector<uint8_t> sun_visible = SunVisibility(preset, scene, embree, points, normals);
+  const SurfaceSamples surface(preset, world_from_camera, camera, buffers);
+  const std::vector<uint8_t> sun_visible = surface.SunVisibility(preset, scene, embree);
   const Eigen::Matrix3d rotation = world_from_camera.linear();
   cv::Mat image(camera.height, camera.width, CV_8UC3);
   tbb::parallel_for(0, camera.height, [&](int v) {
@@ -241,10 +259,11 @@ cv::Mat ShadeView(const ShadingPreset& preset, const SynthOptions& options, cons
                        ? scene.lighting.Environment(-to_viewer)
                        : Eigen::Vector3d(Eigen::Vector3d(0.70, 0.80, 0.95) * (1.0 - 0.25 * double(v) / camera.height));
       } else {
-        const double cos_incidence = std::max(0.2, std::abs(normals[pixel].dot(to_viewer)));
+        Eigen::Vector3d point, normal;
+        surface.At(u, v, &point, &normal);
+        const double cos_incidence = std::max(0.2, std::abs(normal.dot(to_viewer)));
         const double footprint = buffers.depth[pixel] * ray.norm() / camera.fx / cos_incidence;
-        radiance = SurfaceRadiance(view, buffers, pixel, points[pixel], normals[pixel], to_viewer, footprint,
-                                   sun_visible[pixel]);
+        radiance = SurfaceRadiance(view, buffers, pixel, point, normal, to_viewer, footprint, sun_visible[pixel]);
       }
       cv::Vec3b& out = image.at<cv::Vec3b>(v, u);
       for (int c = 0; c < 3; ++c) {
