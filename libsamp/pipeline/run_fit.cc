@@ -122,8 +122,7 @@ void CheckSequenceNames(const RunFitOptions& options) {
 }
 
 std::string MeshPrefix(const RunFitOptions& options, const std::string& seq, int track_id) {
-  const std::string dir = options.sequences.size() > 1 ? "meshes/" + seq + "/" : "meshes/";
-  return dir + "track_" + std::to_string(track_id);
+  return FitMeshStem(seq, track_id, options.sequences.size() > 1);
 }
 
 // Writes FOLDER/label_02/<seq>.txt, the labels by frame and then track id; a
@@ -133,7 +132,7 @@ void WriteSequenceLabels(const std::string& folder, std::vector<ObjectLabel> lab
     return a.frame != b.frame ? a.frame < b.frame : a.track_id < b.track_id;
   });
   try {
-    WriteTrackingLabels((fs::path(folder) / "label_02" / (result->name + ".txt")).string(), labels);
+    WriteTrackingLabels(FitLabelsPath(folder, result->name), labels);
   } catch (const std::exception& e) {
     result->ok = false;
     result->error = std::string("writing labels: ") + e.what();
@@ -293,7 +292,7 @@ RunFitSummary RunFit(const RunFitOptions& options) {
     sequence.failed_tracks = r.track_failures;
     tracks_file.sequences.push_back(std::move(sequence));
   }
-  WriteTracksFile((fs::path(folder) / "tracks.json").string(), tracks_file);
+  WriteTracksFile(FitTracksPath(folder), tracks_file);
 
   FitConfig config;
   config.options = options;

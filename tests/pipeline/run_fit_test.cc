@@ -16,10 +16,10 @@
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/data/kitti_io.h"
-#include "libsamp/eval/synth.h"
+#include "libsamp/synth/synth.h"
 #include "libsamp/pipeline/fit_output.h"
 #include "libsamp/pipeline/run_fit.h"
-#include "tests/eval/test_scene.h"
+#include "tests/synth/test_scene.h"
 #include "tests/testing/expect_error.h"
 
 namespace samp {

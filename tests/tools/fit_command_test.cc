@@ -15,8 +15,8 @@
 #include <thread>
 
 #include "libsamp/data/kitti_io.h"
-#include "libsamp/eval/synth.h"
-#include "tests/eval/test_scene.h"
+#include "libsamp/synth/synth.h"
+#include "tests/synth/test_scene.h"
 
 namespace samp {
 namespace {

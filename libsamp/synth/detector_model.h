@@ -5,7 +5,7 @@
 // (a detector errs the same way for a few frames).
 //
 // Independent of the renderer: it turns true KITTI labels into detections, so
-// it can be tested and reused on its own (tests/eval/detector_model_test.cc).
+// it can be tested and reused on its own (tests/synth/detector_model_test.cc).
 // Deterministic: every track has its own random stream seeded from (seed,
 // track id), so the detections of one car do not depend on the other cars.
 // Not thread-safe (one instance per sequence).

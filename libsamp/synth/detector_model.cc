@@ -1,22 +1,15 @@
-#include "libsamp/eval/detector_model.h"
+#include "libsamp/synth/detector_model.h"
 
 #include <algorithm>
 #include <cmath>
 #include <tuple>
 
 #include "libsamp/core/error.h"
-#include "libsamp/eval/procedural.h"
+#include "libsamp/core/pose.h"
+#include "libsamp/synth/procedural.h"
 
 namespace samp {
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
-
-double WrapAngle(double a) {
-  a = std::fmod(a + kPi, 2.0 * kPi);
-  if (a < 0) a += 2.0 * kPi;
-  return a - kPi;
-}
 
 // Two-state Markov chain with stationary probability p of the "on" state and
 // mean run length L frames of that state: P(on -> off) = 1 / L,

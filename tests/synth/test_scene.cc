@@ -1,4 +1,4 @@
-#include "tests/eval/test_scene.h"
+#include "tests/synth/test_scene.h"
 
 #include <gtest/gtest.h>
 
@@ -23,6 +23,8 @@ Mesh MakeBoxCar(double length) {
   }
   return body;
 }
+
+std::vector<SynthCar> TwoBoxCars() { return {{"boxcar_a", MakeBoxCar(4.2)}, {"boxcar_b", MakeBoxCar(3.8)}}; }
 
 SynthOptions QuickSynthOptions(const std::string& output_folder, uint64_t seed, SynthScene scene) {
   SynthOptions o = scene == SynthScene::kClean ? SynthOptions::Clean() : SynthOptions();

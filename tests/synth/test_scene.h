@@ -1,4 +1,5 @@
-// Helpers of the eval tests: a small car-like mesh and quick synthesis options.
+// Helpers of the synth, eval, pipeline and tools tests: small car-like meshes,
+// quick synthesis options and a scene of synthetic sequences.
 #pragma once
 
 #include <cstdint>
@@ -6,7 +7,7 @@
 #include <vector>
 
 #include "libsamp/core/mesh.h"
-#include "libsamp/eval/synth.h"
+#include "libsamp/synth/synth.h"
 #include "libsamp/model/shape_model.h"
 
 namespace samp::test {
@@ -14,6 +15,8 @@ namespace samp::test {
 // A 4.2 x 1.45 x 1.7 m two-box car in the canonical frame (origin bottom centre,
 // x front, y down, z left), `scale` stretches the length.
 Mesh MakeBoxCar(double length = 4.2);
+// Two box cars of 4.2 m and 3.8 m, "boxcar_a" and "boxcar_b".
+std::vector<SynthCar> TwoBoxCars();
 
 // Small images (400 x 120, KITTI's field of view), few frames, true-disparity noise mode;
 // the scene preset as given (street = the default of `samp synth`, with one parked car).

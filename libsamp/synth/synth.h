@@ -1,11 +1,12 @@
 // Synthetic KITTI-like stereo sequences with ground truth (docs/synthetic.md).
-// A textured road plane, textured building blocks beside the road and CAD cars
-// with plain paint, rendered with Embree into a KITTI-calibrated stereo rig on
-// a moving ego car; the disparity either from OpenCV StereoSGBM on the rendered
-// pair or the true disparity plus a noise model; detections are the true boxes
-// with distance-dependent noise, 180-degree flips and misses.
+// CAD cars on a street (the default preset: lanes, kerbs, facades, clutter,
+// parked rows, traffic, ego sway, sun and shadows) or on the clean preset's
+// textured road between building blocks, rendered with Embree into a
+// KITTI-calibrated stereo rig on a moving ego car; the disparity either from
+// OpenCV StereoSGBM on the rendered pair or the true disparity plus a noise
+// model; detections from a stereo detector's error model (detector_model.h).
 //
-// The output is exactly the sequence layout `samp fit` reads (issue 3):
+// The output is exactly the sequence layout `samp fit` reads:
 //   SEQ/calib/<seq>.txt, image_2/, image_3/, disparity/, detections/, planes/, poses/<seq>.txt
 // plus the ground truth in SEQ/gt/ (label_02/<seq>.txt, depth/, obj_map/, meshes/, cars.json).
 // Everything is a function of the options (seed included): same options, same bytes.
@@ -17,8 +18,8 @@
 #include <vector>
 
 #include "libsamp/core/mesh.h"
-#include "libsamp/eval/detector_model.h"
-#include "libsamp/eval/street_scene.h"
+#include "libsamp/synth/detector_model.h"
+#include "libsamp/synth/street_scene.h"
 
 namespace samp {
 
@@ -59,7 +60,7 @@ enum class DisparitySource {
 };
 
 // Which scenes to make: the realistic street (the default, docs/synthetic.md
-// "Street") or the clean scenes of the first benchmark (`--preset clean`).
+// "Street") or the clean scenes (`--preset clean`, docs/synthetic.md "Presets").
 enum class SynthScene { kStreet, kClean };
 
 struct SynthOptions {
@@ -145,8 +146,8 @@ struct SynthOptions {
   // Print progress.
   bool show_progress = true;
 
-  // The clean preset: today's first-benchmark scenes (plain paint, no street
-  // clutter, no sway, 3DOP-like white detection noise, no false positives).
+  // The clean preset: plain paint, no street clutter, no sway, 3DOP-like
+  // white detection noise, no false positives.
   static SynthOptions Clean();
   void Check() const;
   std::string ToJson() const;

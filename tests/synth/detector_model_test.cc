@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "libsamp/core/error.h"
-#include "libsamp/eval/detector_model.h"
+#include "libsamp/synth/detector_model.h"
 
 namespace samp {
 namespace {
@@ -84,7 +84,7 @@ Draws Simulate(const DetectorModelOptions& options, uint64_t seed, int num_track
 TEST(DetectorModel, DefaultsMatchTheStereoDetectorTargets) {
   const DetectorModelOptions options;  // the defaults of `samp synth`
   const Draws d = Simulate(options, 7, 2000);
-  // Issue 11: median position error about 0.35 m below 20 m and about 0.6 m beyond 40 m.
+  // A stereo detector: median position error about 0.35 m below 20 m and about 0.6 m beyond 40 m.
   EXPECT_NEAR(Median(d.near_error), 0.35, 0.03);
   EXPECT_NEAR(Median(d.far_error), 0.60, 0.04);
   // Vertical std 0.2-0.3 m, size std ~0.3 m.

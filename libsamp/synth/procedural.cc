@@ -1,4 +1,4 @@
-#include "libsamp/eval/procedural.h"
+#include "libsamp/synth/procedural.h"
 
 #include <algorithm>
 #include <cmath>
