@@ -30,6 +30,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/ply_io.h"
+#include "libsamp/model/gram.h"
 #include "libsamp/model/manifold_projection.h"
 #include "libsamp/model/shape_model.h"
 #include "libsamp/model/trainer.h"
@@ -437,6 +438,41 @@ PYBIND11_MODULE(_samp, m) {
       py::arg("options"), py::arg("mean"), py::arg("components"), py::arg("eigenvalues"),
       py::arg("total_variance"), py::arg("names"),
       "A model file (ShapeModel::Save) on options.grid with the trainer's options in its metadata.");
+  // The PCA's two products (model/gram.h) on blocks of grids, for a PCA whose
+  // grids are spread over processes (samp.batch train): the same float
+  // kernels, so the same sums as model/pca.cc.
+  m.def(
+      "centred_gram",
+      [](const py::array& x_array, const py::array& mean_array) {
+        const auto x = py::array_t<float, py::array::f_style | py::array::forcecast>::ensure(x_array);
+        const auto mean = py::array_t<float, py::array::f_style | py::array::forcecast>::ensure(mean_array);
+        SAMP_CHECK(x && x.ndim() == 2 && mean && mean.size() == x.shape(0))
+            << "centred_gram: x must be D x N and mean D values";
+        const int64_t dim = x.shape(0), n = x.shape(1);
+        py::array_t<double, py::array::f_style> gram(std::vector<py::ssize_t>{n, n});
+        double* out = gram.mutable_data();
+        py::gil_scoped_release release;
+        CentredGram(x.data(), dim, n, mean.data(), out, BestGramKernel());
+        return gram;
+      },
+      py::arg("x"), py::arg("mean"), "CentredGram (model/gram.h): Xc^T Xc of x (D x N float32) centred by mean.");
+  m.def(
+      "centred_product",
+      [](const py::array& x_array, const py::array& mean_array, const py::array& p_array) {
+        const auto x = py::array_t<float, py::array::f_style | py::array::forcecast>::ensure(x_array);
+        const auto mean = py::array_t<float, py::array::f_style | py::array::forcecast>::ensure(mean_array);
+        const auto p = py::array_t<double, py::array::f_style | py::array::forcecast>::ensure(p_array);
+        SAMP_CHECK(x && x.ndim() == 2 && mean && mean.size() == x.shape(0) && p && p.ndim() == 2 &&
+                   p.shape(0) == x.shape(1))
+            << "centred_product: x must be D x N, mean D values and p N x C";
+        const int64_t dim = x.shape(0), n = x.shape(1), c = p.shape(1);
+        py::array_t<double, py::array::f_style> product(std::vector<py::ssize_t>{dim, c});
+        double* out = product.mutable_data();
+        py::gil_scoped_release release;
+        CentredProduct(x.data(), dim, n, mean.data(), p.data(), c, out, BestGramKernel());
+        return product;
+      },
+      py::arg("x"), py::arg("mean"), py::arg("p"), "CentredProduct (model/gram.h): Xc P.");
   m.def("sdf_of_mesh", &SdfOfMesh, py::arg("path"), py::arg("options"),
         "CanonicalCad + ScanToSdf (model/trainer.h): the SDF of one CAD file as training computes it.");
 }

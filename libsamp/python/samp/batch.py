@@ -175,14 +175,16 @@ def run_fit_batch(args, out=sys.stdout, err=sys.stderr):
 # SDFs on the workers, PCA on the client from a streamed Gram accumulation:
 # each model's SDF (TrainJobSdf, as samp train computes it) stays in its
 # worker's memory; blocks of B grids are stacked there, and the client only
-# receives reductions: per block the column sums, the B x B' blocks of the
-# Gram matrix X^T X, the products X_b^T m and X_b P. The client holds the
-# N x N Gram matrix, the mean (D) and the components (D x R), independent of
-# the number of models otherwise. The PCA then follows model/pca.cc step by
-# step (mean in double rounded to float; Gram of the grids centred by that
-# float mean; top R eigenpairs; W = Xc V diag(1 / sqrt((N - 1) lambda));
-# Cholesky-QR re-orthonormalisation; the largest-magnitude entry of each
-# component positive), so the model matches samp train's to float round-off.
+# receives reductions: the running double sum for the mean (a chain of tasks
+# over the blocks in order), the blocks of the centred Gram matrix and the
+# blocks' products Xc_b P, computed by the library's own kernels
+# (model/gram.h CentredGram, CentredProduct). The client holds the N x N Gram
+# matrix, the mean (D) and the components (D x R), nothing else that grows
+# with N. The PCA follows model/pca.cc step by step (float mean of double
+# sums; Gram / (N - 1); top R eigenpairs; W = Xc V diag(1 / sqrt((N - 1)
+# lambda)); Cholesky-QR re-orthonormalisation; the largest-magnitude entry of
+# each component positive), so the model matches samp train's to round-off
+# of the eigensolver (numpy's LAPACK here, Eigen or Spectra there).
 
 _JOBS = {}
 
@@ -215,20 +217,26 @@ def _stack(*results):
     return np.stack([r["values"] for r in results], axis=1)  # D x B float32
 
 
-def _column_sums(x):
-    return x.astype("float64").sum(axis=1)
+def _add_columns(total, x):
+    """total + the columns of x, one after the other in double (model/pca.cc's mean)."""
+    import numpy as np
+    total = np.zeros(x.shape[0]) if total is None else total.copy()
+    for k in range(x.shape[1]):
+        total += x[:, k].astype(np.float64)
+    return total
 
 
-def _gram_block(xa, xb):
-    return xa.astype("float64").T @ xb.astype("float64")
+def _gram_block(xa, xb, mean):
+    """The (a, b) block of the centred Gram matrix, by the library's kernel (model/gram.h)."""
+    import numpy as np
+    if xb is None:
+        return _samp.centred_gram(xa, mean)
+    both = _samp.centred_gram(np.asfortranarray(np.hstack([xa, xb])), mean)
+    return both[:xa.shape[1], xa.shape[1]:].copy()
 
 
-def _dot_mean(x, mean):
-    return x.astype("float64").T @ mean
-
-
-def _times(x, p):
-    return x.astype("float64") @ p
+def _product_block(x, mean, p):
+    return _samp.centred_product(x, mean, p)
 
 
 def train_options_from_args(args):
@@ -298,34 +306,26 @@ def run_train_batch(args, out=sys.stdout, err=sys.stderr):
         blocks = [used[b:b + block] for b in range(0, n, block)]
         offsets = np.cumsum([0] + [len(b) for b in blocks])
         stacks = [client.submit(_stack, *[sdfs[i] for i in b], pure=False) for b in blocks]
-        # Mean: double sums rounded to float (model/pca.cc).
-        total = np.zeros(dim)
-        for f in as_completed([client.submit(_column_sums, s) for s in stacks]):
-            total += f.result()
-        mean32 = (total / n).astype(np.float32)
-        mean = mean32.astype(np.float64)
-        mean_future = client.scatter(mean, broadcast=True)
-        # Streamed Gram X^T X and X^T m, block by block as they arrive.
+        # Mean: double sums over the grids in order, rounded to float (model/pca.cc),
+        # accumulated along a chain of tasks, one block after the other.
+        total = None
+        for stack in stacks:
+            total = client.submit(_add_columns, total, stack, pure=False)
+        mean32 = (total.result() / n).astype(np.float32)
+        mean_future = client.scatter(mean32, broadcast=True)
+        # The centred Gram matrix, streamed block by block as the blocks arrive.
         gram = np.zeros((n, n))
-        xm = np.zeros(n)
         pending = {}
         for a in range(len(blocks)):
-            pending[client.submit(_dot_mean, stacks[a], mean_future)] = ("m", a, a)
             for b in range(a, len(blocks)):
-                pending[client.submit(_gram_block, stacks[a], stacks[b])] = ("g", a, b)
+                f = client.submit(_gram_block, stacks[a], stacks[b] if b != a else None, mean_future, pure=False)
+                pending[f] = (a, b)
         for f in as_completed(list(pending)):
-            kind, a, b = pending.pop(f)
+            a, b = pending.pop(f)
             value = f.result()
-            if kind == "m":
-                xm[offsets[a]:offsets[a + 1]] = value
-            else:
-                gram[offsets[a]:offsets[a + 1], offsets[b]:offsets[b + 1]] = value
-                gram[offsets[b]:offsets[b + 1], offsets[a]:offsets[a + 1]] = value.T
+            gram[offsets[a]:offsets[a + 1], offsets[b]:offsets[b + 1]] = value
+            gram[offsets[b]:offsets[b + 1], offsets[a]:offsets[a + 1]] = value.T
             del value
-        mm = float(mean @ mean)
-        gram -= xm[:, None]
-        gram -= xm[None, :]
-        gram += mm
         gram /= n - 1
         total_variance = float(np.trace(gram))
         eigenvalues, eigenvectors = np.linalg.eigh(gram)
@@ -339,11 +339,11 @@ def run_train_batch(args, out=sys.stdout, err=sys.stderr):
                                   "components asked for (eigenvalue %d = %g)" % (k, r, k, eigenvalues[k]))
         projection = eigenvectors / np.sqrt(eigenvalues * (n - 1))[None, :]
         components = np.zeros((dim, r))
-        products = {client.submit(_times, stacks[a], projection[offsets[a]:offsets[a + 1]]): a
-                    for a in range(len(blocks))}
-        for f in as_completed(list(products)):
+        products = [client.submit(_product_block, stacks[a], mean_future,
+                                  np.asfortranarray(projection[offsets[a]:offsets[a + 1]]), pure=False)
+                    for a in range(len(blocks))]
+        for f in products:  # in block order: the same double sums in every run
             components += f.result()
-        components -= np.outer(mean, projection.sum(axis=0))
         # Cholesky QR (R^T R = W^T W, W <- W R^-1), then the sign rule.
         upper = np.linalg.cholesky(components.T @ components).T
         if np.any(np.diag(upper) <= 0.5):
@@ -402,7 +402,8 @@ def build_parser():
     train.add_argument("--config", help="JSON of TrainOptions fields (samp.TrainOptions().to_dict() keys)")
     train.add_argument("--set", action="append", metavar="FIELD=VALUE",
                        help="any TrainOptions field by its path, value as JSON (scan.num_views=50); repeatable")
-    train.add_argument("--block", type=int, default=64, help="grids per Gram block task")
+    train.add_argument("--block", type=int, default=512,
+                       help="grids per block task (512 = the Gram kernel's summation depth: the same sums as samp train)")
     train.add_argument("--connect-timeout", default="30s", help="timeout to reach the scheduler")
     train.add_argument("--no-progress", dest="progress", action="store_false", help="no progress line")
     return parser
