@@ -216,8 +216,27 @@ py::dict SdfOfMesh(const std::string& path, const TrainOptions& options) {
   ScannedSdf scanned;
   {
     py::gil_scoped_release release;
-    const CanonicalizeOptions canonicalize =
+    // As the trainer treats the file: its manifest entry (matched by the path
+    // relative to options.cad_folder, else its name), else the manifest's
+    // defaults or the preset.
+    CanonicalizeOptions canonicalize =
         options.preset.empty() ? CanonicalizeOptions() : CanonicalPreset(options.preset);
+    if (!options.manifest_path.empty()) {
+      const Manifest manifest = LoadManifest(options.manifest_path);
+      std::string relative = fs::path(path).filename().string();
+      if (!options.cad_folder.empty()) {
+        const fs::path r = fs::path(path).lexically_normal().lexically_relative(fs::path(options.cad_folder).lexically_normal());
+        if (!r.empty() && *r.begin() != "..") relative = r.generic_string();
+      }
+      const ManifestEntry* entry = manifest.Find(relative);
+      if (entry != nullptr) {
+        SAMP_CHECK(!entry->skip) << path << ": skipped by the manifest " << options.manifest_path << ": "
+                                 << entry->skip_reason;
+        canonicalize = entry->canonicalize;
+      } else if (options.preset.empty()) {
+        canonicalize = manifest.defaults;
+      }
+    }
     canonical = CanonicalCad(path, canonicalize);
     scanned = ScanToSdf(canonical.mesh, options.scan, options.grid, options.sdf);
   }

@@ -283,6 +283,22 @@ def test_sdf_of_mesh_of_a_box(tmp_path):
     assert at([-3.0, -2.3, -1.4]) > 0.5  # the grid's corner is outside
     with pytest.raises(samp.Error, match="missing.obj"):
         samp.sdf_of_mesh(str(tmp_path / "missing.obj"), o)
+    # The file's manifest entry canonicalises it, as in training: the box in
+    # centimetres, scaled to a 4.5 m length.
+    cad = tmp_path / "cad"
+    (cad / "sub").mkdir(parents=True)
+    write_box_obj(str(cad / "sub" / "big.obj"), 420.0, 150.0, 180.0)
+    manifest = tmp_path / "manifest.json"
+    manifest.write_text('{"models": [{"file": "sub/big.obj", "target_length": 4.5, "up": "+y", "forward": "+x"},'
+                        ' {"file": "sub/skipped.obj", "skip": true, "skip_reason": "a test"}]}')
+    o.manifest = str(manifest)
+    o.cad_folder = str(cad)
+    scaled = samp.sdf_of_mesh(str(cad / "sub" / "big.obj"), o)
+    assert scaled["sign_ok"]
+    np.testing.assert_allclose(scaled["size"], [4.5, 150.0 * 4.5 / 420.0, 180.0 * 4.5 / 420.0], rtol=1e-6)
+    write_box_obj(str(cad / "sub" / "skipped.obj"), 4.2, 1.5, 1.8)
+    with pytest.raises(samp.Error, match="skipped by the manifest .*: a test"):
+        samp.sdf_of_mesh(str(cad / "sub" / "skipped.obj"), o)
 
 
 def test_train_on_boxes(tmp_path):

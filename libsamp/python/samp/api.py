@@ -311,8 +311,9 @@ def train(cad_dir, output, options=None):
 
 
 def sdf_of_mesh(path, options=None):
-    """The SDF of one CAD file as training computes it: canonicalised (options.preset,
-    else automatic axes), scanned (options.scan) and on options.grid (options.sdf).
+    """The SDF of one CAD file as training computes it: canonicalised (its entry in
+    options.manifest, matched by the path relative to options.cad_folder or by name;
+    else options.preset, the manifest's defaults or automatic axes), scanned (options.scan) and on options.grid (options.sdf).
     Returns a dict: values (nx, ny, nz) float32, grid, inside_fraction, sign_ok,
     report, scale, size, up, forward, warnings."""
     options = TrainOptions() if options is None else options
