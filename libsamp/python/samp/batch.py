@@ -6,7 +6,8 @@
 Every sequence folder directly under ROOT (one with a calib/ folder) is one
 task: on a worker it runs RunFit, the function behind `samp fit`, with
 sequences = [ROOT/NAME] and output_dir = OUT/NAME, so OUT/NAME holds exactly
-what `samp fit --seq ROOT/NAME --out OUT/NAME [the same options]` writes
+what `samp fit --seq ROOT/NAME --out OUT/NAME [the same options]` writes (but
+for the wall-clock times in tracks.json, which differ from run to run)
 (written into a temporary folder and renamed into place, so a worker that dies
 leaves no half-written output). Dask reschedules the task of a worker that
 died (the scheduler's distributed.scheduler.allowed-failures, default 3); the
