@@ -10,7 +10,6 @@ beside it.
 
 import json
 import os
-import shutil
 import tempfile
 
 import numpy as np
