@@ -10,6 +10,8 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/pose.h"
+#include "libsamp/data/kitti_io.h"
+#include "libsamp/data/sequence_layout.h"
 
 namespace samp {
 namespace {
@@ -648,6 +650,94 @@ CalibrationResult CalibrateTracker(const std::vector<std::vector<FrameDetections
     }
   }
   return result;
+}
+
+void DetectorCalibrationOptions::Check() const {
+  SAMP_CHECK(!sequences.empty()) << "DetectorCalibrationOptions.sequences is empty (give at least one --seq)";
+  SAMP_CHECK(truth_labels.empty() || truth_labels.size() == sequences.size())
+      << "DetectorCalibrationOptions.truth_labels: " << truth_labels.size() << " files for " << sequences.size()
+      << " sequences (give none or one per sequence)";
+  SAMP_CHECK(match_distance > 0) << "DetectorCalibrationOptions.match_distance must be > 0";
+  sequence.Check();
+  noise.Check();
+  defaults.Check();
+}
+
+std::string DetectorCalibrationSummary::BriefReport() const {
+  std::ostringstream s;
+  s << num_frames << " frames: " << num_detections << " detections, " << num_truths << " true boxes, "
+    << num_matched << " matched";
+  return s.str();
+}
+
+DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& options,
+                                              DetectorCalibrationSummary* summary) {
+  options.Check();
+  DetectorCalibrationSummary local;
+  DetectorCalibrationSummary& result = summary != nullptr ? *summary : local;
+  result = DetectorCalibrationSummary();
+  std::vector<MatchedDetection> matches;
+  int num_missed = 0, num_false_positives = 0;
+  for (size_t s = 0; s < options.sequences.size(); ++s) {
+    const SequenceReader reader(options.sequences[s], options.sequence);
+    const SequenceFiles& files = reader.files();
+    const std::string labels_path = options.truth_labels.empty()
+                                        ? SequenceLayout(files.directory, files.name).GroundTruthLabels()
+                                        : options.truth_labels[s];
+    std::map<int, std::vector<ObjectLabel>> truth_of_frame;
+    std::map<int, int> index_of_frame;
+    for (int i = 0; i < reader.num_frames(); ++i) index_of_frame[files.frames[i].frame] = i;
+    auto in_range = [&](int frame) {
+      return (options.sequence.first_frame < 0 || frame >= options.sequence.first_frame) &&
+             (options.sequence.last_frame < 0 || frame <= options.sequence.last_frame);
+    };
+    for (const ObjectLabel& label : ReadTrackingLabels(labels_path)) {
+      if (SameObjectType(label.type, "DontCare")) continue;
+      bool kept = false;
+      for (const std::string& type : options.sequence.object_types) kept = kept || SameObjectType(label.type, type);
+      if (!kept || !in_range(label.frame)) continue;
+      SAMP_CHECK(index_of_frame.count(label.frame) > 0)
+          << labels_path << ": a label in frame " << label.frame << ", which sequence " << options.sequences[s]
+          << " does not have (mismatched label file?)";
+      truth_of_frame[label.frame].push_back(label);
+    }
+    for (const auto& [frame, index] : index_of_frame) {
+      if (!in_range(frame)) continue;
+      ++result.num_frames;
+      const std::vector<ObjectLabel> detections = reader.ReadDetections(index);
+      const std::vector<ObjectLabel>& truths = truth_of_frame[frame];
+      result.num_detections += int(detections.size());
+      result.num_truths += int(truths.size());
+      const int rows = int(detections.size()), cols = int(truths.size());
+      std::vector<double> cost(size_t(rows) * cols, kNoAssignment);
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) {
+          const Eigen::Vector3d d = detections[r].position - truths[c].position;
+          const double horizontal = std::hypot(d.x(), d.z());
+          if (horizontal <= options.match_distance) cost[size_t(r) * cols + c] = horizontal;
+        }
+      const std::vector<int> assignment = SolveAssignment(cost, rows, cols);
+      int matched = 0;
+      for (int r = 0; r < rows; ++r) {
+        if (assignment[r] < 0) continue;
+        MatchedDetection m;
+        m.detection = detections[r];
+        m.truth = truths[assignment[r]];
+        m.truth_id = int(s) * 1000000 + m.truth.track_id;
+        matches.push_back(m);
+        ++matched;
+      }
+      num_false_positives += rows - matched;
+      num_missed += cols - matched;
+    }
+  }
+  result.num_matched = int(matches.size());
+  SAMP_CHECK(result.num_matched >= options.noise.min_samples)
+      << "calibrate-detector: only " << result.num_matched << " detection(s) match a true box within "
+      << options.match_distance << " m (" << result.BriefReport() << "); at least " << options.noise.min_samples
+      << " are needed: give more sequences, or check that the labels belong to the sequences";
+  return EstimateDetectorNoiseFromTruth(matches, num_missed, num_false_positives, result.num_frames, options.noise,
+                                        options.defaults);
 }
 
 }  // namespace samp

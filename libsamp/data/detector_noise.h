@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "libsamp/data/sequence.h"
 #include "libsamp/data/tracking.h"
 
 namespace samp {
@@ -157,5 +158,31 @@ TrackerOptions TrackerForModel(const TrackerOptions& initial, const DetectorNois
 // `frames_of_sequence`: every sequence's frames (detections and ego poses).
 CalibrationResult CalibrateTracker(const std::vector<std::vector<FrameDetections>>& frames_of_sequence,
                                    const TrackerOptions& initial, const CalibrationOptions& options);
+
+// `samp calibrate-detector`: the detections of sequence directories
+// (detections/, the sequence layout) matched to ground-truth tracking labels
+// (KITTI label_02 format) frame by frame: a minimum-cost assignment on the
+// horizontal distance of the bottom centres, pairs within match_distance.
+struct DetectorCalibrationOptions {
+  std::vector<std::string> sequences;
+  // One KITTI tracking label file per sequence; empty = SEQ/gt/label_02/<seq>.txt.
+  std::vector<std::string> truth_labels;
+  SequenceOptions sequence;      // object types, minimum score, frame range
+  double match_distance = 3.0;   // m
+  DetectorNoiseOptions noise;
+  TrackerOptions defaults;       // the values of terms with too few samples
+  void Check() const;            // throws samp::Error naming the field
+};
+
+struct DetectorCalibrationSummary {
+  int num_detections = 0, num_truths = 0, num_matched = 0, num_frames = 0;
+  std::string BriefReport() const;
+};
+
+// Throws samp::Error naming the file when a sequence or label file cannot be
+// read, a label file has labels in frames its sequence does not have
+// (mismatched files), or fewer than noise.min_samples detections match.
+DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& options,
+                                              DetectorCalibrationSummary* summary = nullptr);
 
 }  // namespace samp

@@ -10,6 +10,8 @@
 #include <random>
 
 #include "libsamp/core/error.h"
+#include "libsamp/data/kitti_io.h"
+#include "libsamp/data/sequence_layout.h"
 #include "tests/testing/expect_error.h"
 
 namespace samp {
@@ -306,6 +308,79 @@ TEST(DetectorNoiseModelFile, AppliesToTheTracker) {
   DetectorNoiseOptions o;
   o.bin_edges = {0, 20, 10};
   test::ExpectError([&] { o.Check(); }, {"DetectorNoiseOptions.bin_edges"});
+}
+
+// `samp calibrate-detector`'s library call on a sequence directory written
+// here (calibration, detections/, ground-truth tracking labels): the model
+// recovers the detector's sigmas and biases, round-trips through its file,
+// and mismatched label files and too few detections are clear errors.
+std::string WriteCalibrationSequence(const std::string& dir, const TrueNoise& noise, int num_frames,
+                                     std::string* labels_path) {
+  std::filesystem::create_directories(dir + "/calib");
+  std::filesystem::create_directories(dir + "/detections");
+  std::filesystem::create_directories(dir + "/gt/label_02");
+  const std::string name = "0000";
+  const SequenceLayout layout(dir, name);
+  StereoCalibration calibration;
+  calibration.baseline = 0.54;
+  WriteCalibration(layout.Calibration(), calibration);
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<ObjectLabel> truths;
+  for (int f = 0; f < num_frames; ++f) {
+    std::vector<ObjectLabel> detections;
+    for (int c = 0; c < 6; ++c) {
+      ObjectLabel truth;
+      truth.frame = f, truth.track_id = c;
+      truth.position = Eigen::Vector3d(-6 + 2.4 * c, 1.65, 8 + 7.0 * c + 0.3 * f);
+      truth.height = kHeight, truth.width = kWidth, truth.length = kLength;
+      truth.rotation_y = -M_PI / 2;
+      truths.push_back(truth);
+      if (uniform(rng) < 0.05) continue;  // missed
+      ObjectLabel d = Detect(truth, noise, rng);
+      d.frame = -1, d.track_id = -1;
+      detections.push_back(d);
+    }
+    WriteLabels(layout.Detections(f), detections);
+  }
+  *labels_path = layout.GroundTruthLabels();
+  WriteTrackingLabels(*labels_path, truths);
+  return dir;
+}
+
+TEST(DetectorCalibrationFromTruth, RecoversTheDetectorAndChecksItsInput) {
+  const auto root = std::filesystem::temp_directory_path() / ("samp_calibrate_" + std::to_string(::getpid()));
+  TrueNoise noise = AllNoise(0.0);
+  std::string labels;
+  DetectorCalibrationOptions o;
+  o.sequences = {WriteCalibrationSequence((root / "seq").string(), noise, 120, &labels)};
+  DetectorCalibrationSummary summary;
+  const DetectorNoiseModel m = CalibrateDetectorFromTruth(o, &summary);
+  EXPECT_EQ(summary.num_truths, 720) << summary.BriefReport();
+  // Far cars (up to 80 m, along-ray sigma ~1.8 m) may err beyond the 3 m match distance.
+  EXPECT_GE(summary.num_matched, 0.97 * summary.num_detections) << summary.BriefReport();
+  EXPECT_EQ(m.source, "ground truth");
+  for (int i = 0; i < 3; ++i) {
+    ExpectSigma(m.size_sigma[i], noise.size_sigma[i], "size " + std::to_string(i));
+    EXPECT_NEAR(m.size_bias[i], noise.size_bias[i], 0.05) << i;
+  }
+  EXPECT_NEAR(m.along_bias, noise.along_bias, 0.05);
+  EXPECT_NEAR(m.miss_rate, 0.05, 0.025);
+  const std::string path = (root / "model.json").string();
+  WriteDetectorNoiseModel(path, m);
+  EXPECT_EQ(ReadDetectorNoiseModel(path).ToJson(), m.ToJson());
+
+  // A label file of another sequence (frames beyond this one's).
+  std::vector<ObjectLabel> other = ReadTrackingLabels(labels);
+  other.back().frame = 500;
+  WriteTrackingLabels((root / "other.txt").string(), other);
+  o.truth_labels = {(root / "other.txt").string()};
+  test::ExpectError([&] { CalibrateDetectorFromTruth(o); }, {"other.txt", "frame 500", "mismatched"});
+  // Too few detections: 3 frames.
+  DetectorCalibrationOptions few;
+  few.sequences = {WriteCalibrationSequence((root / "few").string(), noise, 3, &labels)};
+  test::ExpectError([&] { CalibrateDetectorFromTruth(few); }, {"calibrate-detector: only ", "at least 30"});
+  std::filesystem::remove_all(root);
 }
 
 }  // namespace
