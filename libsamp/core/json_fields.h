@@ -79,6 +79,17 @@ class OptionsJson {
       in_->Read(key, &value);
     }
   }
+  // A field added after the format settled: written only when it differs from
+  // `default_value` (outputs of runs that do not use it stay as they were),
+  // read when present and `default_value` otherwise.
+  template <typename T>
+  void Optional(const std::string& key, T& value, const T& default_value) {
+    if (writing()) {
+      if (!(value == default_value)) (*out_)[key] = value;
+    } else {
+      value = in_->Has(key) ? in_->Get<T>(key) : default_value;
+    }
+  }
   // An enum written by its name: to_name(value) -> const char*, from_name(std::string) -> E
   // (throws for an unknown name; the error is given the file and key).
   template <typename E, typename ToName, typename FromName>

@@ -113,6 +113,9 @@ void OptionFields(OptionsJson& io, RunFitOptions& o) {
   io("num_threads", o.num_threads);
   io("write_meshes", o.write_meshes);
   io("link_only", o.link_only);
+  // Detector calibration (issue 28; run_fit.h), written only when used.
+  io.Optional("self_calibrate", o.self_calibrate, false);
+  io.Optional("detector_model", o.detector_model_path, std::string());
 }
 
 void WriteFitConfig(const std::string& path, const FitConfig& config) {

@@ -34,8 +34,11 @@ void RunFitOptions::Check() const {
   SAMP_CHECK(!output_dir.empty()) << "RunFitOptions.output_dir is empty";
   SAMP_CHECK(num_threads >= 0) << "RunFitOptions.num_threads must be >= 0 (0 = all cores), is "
                                << num_threads;
+  SAMP_CHECK(!(self_calibrate && !detector_model_path.empty()))
+      << "RunFitOptions: self_calibrate and detector_model_path exclude each other (give one)";
   fit.Check();
   sequence.Check();
+  calibration.Check();
 }
 
 std::string RunFitSummary::BriefReport() const {
@@ -53,6 +56,7 @@ std::string RunFitSummary::BriefReport() const {
       << q.input.tracking.BriefReport();
     for (const auto& f : q.track_failures) s << "\n    skipped " << f;
   }
+  if (detector_model_used) s << "\n  detector model: " << calibration_report;
   return s.str();
 }
 
@@ -227,6 +231,62 @@ void FitSequence(const RunFitOptions& options, const std::string& folder, const 
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The detections and ego poses of a sequence's frames (in the options' frame
+// range), for self-calibration.
+std::vector<FrameDetections> ReadSequenceDetections(const std::string& directory, const SequenceOptions& options) {
+  const SequenceReader reader(directory, options);
+  std::vector<FrameDetections> frames;
+  for (int i = 0; i < reader.num_frames(); ++i) {
+    const int frame = reader.files().frames[i].frame;
+    if ((options.first_frame >= 0 && frame < options.first_frame) ||
+        (options.last_frame >= 0 && frame > options.last_frame))
+      continue;
+    FrameDetections fd;
+    fd.frame = frame;
+    fd.world_from_camera = reader.WorldFromCamera(frame);
+    fd.detections = reader.ReadDetections(i);
+    frames.push_back(std::move(fd));
+  }
+  return frames;
+}
+
+// Self-calibration or a detector model file: the options the run links and
+// fits with (the tracker's sigmas, the fit's detection size sigma), and the
+// model in the summary. Sequences that cannot be read or come with tracking
+// labels do not take part (they fail or are linked later as before).
+RunFitOptions CalibratedOptions(const RunFitOptions& options, RunFitSummary* summary) {
+  RunFitOptions effective = options;
+  if (!options.self_calibrate && options.detector_model_path.empty()) return effective;
+  if (!options.detector_model_path.empty()) {
+    summary->detector_model = ReadDetectorNoiseModel(options.detector_model_path);
+    summary->calibration_report = "read from " + options.detector_model_path + ": " +
+                                  summary->detector_model.BriefReport();
+    effective.sequence.tracker = TrackerForModel(options.sequence.tracker, summary->detector_model,
+                                                 options.calibration.tracker_sigma_scale);
+  } else {
+    std::vector<std::vector<FrameDetections>> frames;
+    for (size_t i = 0; i < options.sequences.size(); ++i) {
+      if (!options.tracking_labels.empty()) continue;
+      try {
+        frames.push_back(ReadSequenceDetections(options.sequences[i], options.sequence));
+      } catch (const std::exception& e) {
+        LogWarning() << "self-calibration: sequence " << options.sequences[i] << " left out: " << e.what();
+      }
+    }
+    const CalibrationResult calibration = CalibrateTracker(frames, options.sequence.tracker, options.calibration);
+    summary->detector_model = calibration.model;
+    summary->calibration_report = calibration.BriefReport();
+    effective.sequence.tracker = calibration.tracker;
+    for (const std::string& note : calibration.model.notes)
+      LogWarning() << "self-calibration: " << note << " (docs/detector_calibration.md)";
+  }
+  summary->detector_model_used = true;
+  if (options.fit.detection_size_sigma > 0)
+    effective.fit.detection_size_sigma = summary->detector_model.MeanSizeSigma();
+  LogInfo() << summary->calibration_report;
+  return effective;
+}
+
 }  // namespace
 
 std::string SequenceOutputName(const std::string& directory) {
@@ -248,11 +308,15 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   options.Check();
   CheckSequenceNames(options);
   const bool earlier_run = CheckOutputFolder(options);
+  RunFitSummary summary;
+  // The options the sequences are linked and fitted with (the detector's
+  // sigmas calibrated when asked); `options` is what config.json records.
+  const RunFitOptions effective = CalibratedOptions(options, &summary);
   std::unique_ptr<ShapeModel> model;
   std::unique_ptr<TrackFitter> fitter;
   if (!options.link_only) {
     model = std::make_unique<ShapeModel>(ShapeModel::Load(options.model_path));
-    fitter = std::make_unique<TrackFitter>(*model, options.fit);
+    fitter = std::make_unique<TrackFitter>(*model, effective.fit);
   }
   // Every file goes into `staged`, which replaces output_dir at the end.
   StagedFolder staged(options.output_dir);
@@ -268,10 +332,9 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   std::vector<SequenceWork> work(options.sequences.size());
   tbb::task_arena arena(options.num_threads > 0 ? options.num_threads : tbb::task_arena::automatic);
   arena.execute([&] {
-    tbb::parallel_for(size_t(0), work.size(), [&](size_t i) { FitSequence(options, folder, fitter.get(), i, &work[i]); });
+    tbb::parallel_for(size_t(0), work.size(), [&](size_t i) { FitSequence(effective, folder, fitter.get(), i, &work[i]); });
   });
 
-  RunFitSummary summary;
   TracksFile tracks_file;
   tracks_file.model = options.model_path;
   for (SequenceWork& w : work) {
@@ -298,6 +361,8 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   config.options = options;
   config.model_components = model ? model->NumComponents() : 0;
   WriteFitConfig((fs::path(folder) / "config.json").string(), config);
+  if (summary.detector_model_used)
+    WriteDetectorNoiseModel((fs::path(folder) / "detector_model.json").string(), summary.detector_model);
 
   int num_detections = 0;
   for (const auto& q : summary.sequences) num_detections += q.input.tracking.num_detections;

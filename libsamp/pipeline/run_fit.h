@@ -26,8 +26,9 @@
 #include <string>
 #include <vector>
 
-#include "libsamp/fit/fitter.h"
+#include "libsamp/data/detector_noise.h"
 #include "libsamp/data/sequence.h"
+#include "libsamp/fit/fitter.h"
 
 namespace samp {
 
@@ -57,6 +58,18 @@ struct RunFitOptions {
   // is part of the output (`samp fit --pictures --html`). If it throws,
   // output_dir stays as it was. Not written to config.json.
   std::function<void(const std::string& folder)> before_commit;
+  // Detector self-calibration (docs/detector_calibration.md): link every
+  // sequence with robust cues, estimate the detector's noise model from the
+  // tracks of all sequences (pooled), re-link with it to a fixed point, then
+  // link and fit with the estimate: the tracker's sigmas and the fit's
+  // detection size sigma (unless 0 = off) and position covariance come from
+  // it. The estimate goes to OUT/detector_model.json and the summary.
+  bool self_calibrate = false;
+  CalibrationOptions calibration;
+  // A detector model file (`samp calibrate-detector`, data/detector_noise.h)
+  // used instead of the tracker's and the fit's detector sigmas; excludes
+  // self_calibrate.
+  std::string detector_model_path;
 
   // Throws samp::Error naming the field and the rule it broke.
   void Check() const;
@@ -84,6 +97,10 @@ struct RunFitSummary {
   // track failed or was dropped). Empty otherwise. The output is still written.
   std::string failure;
   bool replaced_previous_output = false;  // output_dir held an earlier run, now replaced
+  // The detector model the run used (self-calibrated or read), when any.
+  bool detector_model_used = false;
+  DetectorNoiseModel detector_model;
+  std::string calibration_report;  // CalibrationResult::BriefReport, or where the model was read
   double seconds = 0.0;
   std::string BriefReport() const;
 };

@@ -291,3 +291,67 @@ TEST(RunFit, RemovesTheTemporaryFolderOfAKilledRun) {
 
 }  // namespace
 }  // namespace samp
+
+namespace samp {
+namespace {
+
+// Self-calibration (issue 28) on the small scene: too few detections for an
+// estimate, so every term keeps the given sigmas with a note; the model and its
+// sample counts go to the summary and OUT/detector_model.json, the option to
+// config.json. Off: neither (the outputs of earlier versions).
+TEST(RunFitCalibration, SelfCalibrationWritesTheModel) {
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = scene.Folder("calibrate");
+  RunFitOptions o = Options(scene.model, {scene.sequences[0]}, runs + "/on");
+  o.self_calibrate = true;
+  const RunFitSummary on = RunFit(o);
+  ASSERT_GT(on.num_tracks_fitted, 0) << on.BriefReport();
+  EXPECT_TRUE(on.detector_model_used);
+  EXPECT_NE(on.BriefReport().find("detector self-calibration"), std::string::npos) << on.BriefReport();
+  EXPECT_EQ(on.detector_model.source, "defaults");
+  EXPECT_FALSE(on.detector_model.notes.empty());
+  const DetectorNoiseModel written = ReadDetectorNoiseModel(runs + "/on/detector_model.json");
+  EXPECT_EQ(written.ToJson(), on.detector_model.ToJson());
+  EXPECT_EQ(written.size_sigma[0], o.sequence.tracker.size_sigma);
+  std::ifstream config(runs + "/on/config.json");
+  const std::string text((std::istreambuf_iterator<char>(config)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"self_calibrate\": true"), std::string::npos);
+
+  const RunFitSummary off = RunFit(Options(scene.model, {scene.sequences[0]}, runs + "/off"));
+  EXPECT_FALSE(off.detector_model_used);
+  EXPECT_FALSE(fs::exists(runs + "/off/detector_model.json"));
+  std::ifstream config_off(runs + "/off/config.json");
+  const std::string text_off((std::istreambuf_iterator<char>(config_off)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text_off.find("self_calibrate"), std::string::npos);
+  EXPECT_EQ(text_off.find("robust_cues"), std::string::npos);
+}
+
+// A detector model file replaces the tracker's sigmas; a bad one is a clear
+// error before anything is written; it excludes self-calibration.
+TEST(RunFitCalibration, DetectorModelFile) {
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = scene.Folder("detector_model");
+  fs::create_directories(runs);
+  DetectorNoiseModel model;
+  model.source = "ground truth";
+  model.size_sigma[0] = model.size_sigma[1] = model.size_sigma[2] = 0.5;
+  WriteDetectorNoiseModel(runs + "/model.json", model);
+  RunFitOptions o = Options(scene.model, {scene.sequences[0]}, runs + "/out");
+  o.detector_model_path = runs + "/model.json";
+  const RunFitSummary summary = RunFit(o);
+  ASSERT_GT(summary.num_tracks_fitted, 0) << summary.BriefReport();
+  EXPECT_TRUE(summary.detector_model_used);
+  EXPECT_NE(summary.calibration_report.find("read from"), std::string::npos);
+  EXPECT_EQ(ReadDetectorNoiseModel(runs + "/out/detector_model.json").size_sigma[1], 0.5);
+
+  WriteTextFileAtomically(runs + "/bad.json", "{\"format\": \"samp-detector-model\", \"version\": 9}");
+  o.detector_model_path = runs + "/bad.json";
+  o.output_dir = runs + "/bad_out";
+  test::ExpectError([&] { RunFit(o); }, {"bad.json", "version 9"});
+  EXPECT_FALSE(fs::exists(runs + "/bad_out"));
+  o.self_calibrate = true;
+  test::ExpectError([&] { RunFit(o); }, {"self_calibrate", "detector_model_path"});
+}
+
+}  // namespace
+}  // namespace samp

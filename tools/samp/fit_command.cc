@@ -84,6 +84,10 @@ void AddTrackerOptions(CLI::App* command, TrackerOptions* tracker) {
   command->add_flag("--tracker-swaps,!--no-tracker-swaps", tracker->resolve_switches,
                     "Tracker: swap the tails of two tracks where that resolves an identity switch")
       ->capture_default_str();
+  command->add_flag("--tracker-robust-cues,!--no-tracker-robust-cues", tracker->robust_cues,
+                    "Tracker: a single cue (box size, height or axis) outside its gate costs the gate's value "
+                    "instead of starting a new track when position and motion agree")
+      ->capture_default_str();
   command->add_option("--frame-rate", tracker->frame_rate_hz, "Frames per second of the sequences")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
@@ -206,6 +210,15 @@ void RegisterFitCommand(CLI::App* app) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   AddTrackerOptions(command, &o.sequence.tracker);
+  command->add_flag("--self-calibrate,!--no-self-calibrate", o.self_calibrate,
+                    "Estimate the detector's noise model from the sequences (robust linking, residuals of the "
+                    "smoothed tracks, to a fixed point) and link and fit with it; writes OUT/detector_model.json "
+                    "(docs/detector_calibration.md)")
+      ->capture_default_str();
+  command->add_option("--detector-model", o.detector_model_path,
+                      "A detector model JSON (samp calibrate-detector) giving the tracker's and the fit's "
+                      "detector sigmas (instead of --tracker-*-sigma and --self-calibrate)")
+      ->check(CLI::ExistingFile);
   command->add_flag("--link-only", o.link_only,
                     "Only link detections/ into tracks and write the tracked detections as "
                     "label_02/<seq>.txt (no model, no fit; for samp eval's tracking figures or --tracks)");

@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   samp::tools::RegisterSynthCommand(&app);
   samp::tools::RegisterEvalCommand(&app);
   samp::tools::RegisterViewCommand(&app);
+  samp::tools::RegisterCalibrateCommand(&app);
 
   try {
     app.parse(argc, argv);
