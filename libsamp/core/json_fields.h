@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/error.h"
 
 namespace samp {
@@ -34,7 +35,7 @@ class JsonFields {
       return value.get<T>();
     } catch (const nlohmann::json::exception&) {
       SAMP_THROW() << Where() << ": key '" << key << "' has the wrong type (" << value.type_name() << ": "
-                   << value.dump() << ")";
+                   << DumpJson(value) << ")";
     }
   }
   template <typename T>

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_fields.h"
@@ -357,7 +358,7 @@ std::string DetectorNoiseModel::ToJson() const {
                               {"frames", num_frames}}},
                             {"distance_bins", bins_json},
                             {"notes", notes}};
-  return j.dump(2);
+  return DumpJson(j, 2);
 }
 
 DetectorNoiseModel DetectorNoiseModelFromJson(const std::string& text, const std::string& source) {
@@ -421,7 +422,7 @@ void WriteDetectorNoiseModel(const std::string& path, const DetectorNoiseModel& 
 
 DetectorNoiseModel ReadDetectorNoiseModel(const std::string& path) {
   const nlohmann::json j = ReadJsonFile(path);
-  return DetectorNoiseModelFromJson(j.dump(), path);
+  return DetectorNoiseModelFromJson(DumpJson(j), path);
 }
 
 void DetectorNoiseOptions::Check() const {

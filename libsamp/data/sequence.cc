@@ -56,6 +56,7 @@ void SequenceOptions::Check() const {
   SAMP_CHECK(!object_types.empty()) << "SequenceOptions.object_types must not be empty";
   SAMP_CHECK(last_frame < 0 || first_frame < 0 || first_frame <= last_frame)
       << "SequenceOptions.first_frame = " << first_frame << " is after last_frame = " << last_frame;
+  SAMP_CHECK(max_image_bytes > 0) << "SequenceOptions.max_image_bytes must be > 0, is " << max_image_bytes;
 }
 
 SequenceFiles ListSequence(const std::string& directory) {
@@ -126,10 +127,11 @@ SequenceReader::SequenceReader(const std::string& directory, const SequenceOptio
   for (const FrameFiles& f : files_.frames) {
     const std::string& probe = !f.image_left.empty() ? f.image_left : f.disparity;
     if (probe.empty()) continue;
-    const cv::Mat image = cv::imread(probe, cv::IMREAD_UNCHANGED);
-    SAMP_CHECK(!image.empty()) << probe << ": not a readable PNG image";
-    width = image.cols;
-    height = image.rows;
+    const PngHeader image = ReadPngHeader(probe);  // the size, without decoding
+    SAMP_CHECK(image.width <= 1000000 && image.height <= 1000000)
+        << probe << ": PNG header announces " << image.width << " x " << image.height << " pixels";
+    width = int(image.width);
+    height = int(image.height);
     size_known = true;
     break;
   }
@@ -165,8 +167,14 @@ std::vector<ObjectLabel> SequenceReader::ReadDetections(int index) const {
       << "sequence " << files_.directory << ": missing detections/" << SequenceLayout::FrameTag(files_.name, f.frame)
       << ".txt (an empty file means no detections)";
   std::vector<ObjectLabel> kept;
+  int number = 0;
   for (ObjectLabel& label : ReadLabels(f.detections)) {
+    ++number;
     if (!TypeKept(label.type, options_) || label.score < options_.min_detection_score) continue;
+    // The tracker needs a box with a volume; say which file holds one without.
+    SAMP_CHECK(label.height > 0 && label.width > 0 && label.length > 0)
+        << f.detections << ": detection " << number << " (" << label.type << ") has a zero size h w l = "
+        << label.height << " " << label.width << " " << label.length << " m";
     label.frame = f.frame;
     kept.push_back(label);
   }
@@ -184,15 +192,13 @@ SequenceFrame SequenceReader::ReadFrame(int index, bool with_detections) const {
   if (with_detections) frame.detections = ReadDetections(index);
 
   if (!f.disparity.empty()) {
-    frame.disparity_px = ReadDisparity(f.disparity, size);
+    frame.disparity_px = ReadDisparity(f.disparity, size, options_.max_image_bytes);
   } else {
     SAMP_CHECK(!f.image_left.empty() && !f.image_right.empty())
         << "sequence " << files_.directory << ": frame " << tag << " has no disparity/" << tag
         << ".png and no image_2/image_3 pair to compute it from";
-    const cv::Mat left = cv::imread(f.image_left, cv::IMREAD_GRAYSCALE);
-    const cv::Mat right = cv::imread(f.image_right, cv::IMREAD_GRAYSCALE);
-    SAMP_CHECK(!left.empty()) << f.image_left << ": not a readable image";
-    SAMP_CHECK(!right.empty()) << f.image_right << ": not a readable image";
+    const cv::Mat left = ReadImage(f.image_left, cv::IMREAD_GRAYSCALE, "left image", options_.max_image_bytes);
+    const cv::Mat right = ReadImage(f.image_right, cv::IMREAD_GRAYSCALE, "right image", options_.max_image_bytes);
     SAMP_CHECK(left.size() == size && right.size() == size)
         << "frame " << tag << ": image_2 is " << left.cols << "x" << left.rows << ", image_3 is "
         << right.cols << "x" << right.rows << ", expected " << size.width << "x" << size.height;
@@ -358,6 +364,19 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
   SAMP_CHECK(!indices.empty()) << "sequence " << directory << ": no frames in the range ["
                                << options.first_frame << ", " << options.last_frame << "]";
   result.num_frames = static_cast<int>(indices.size());
+  // Gaps in the frame numbering (frames without any file): said once per gap,
+  // in the messages (tracks.json) and as a warning.
+  for (size_t k = 1; k < indices.size(); ++k) {
+    const int before = files.frames[indices[k - 1]].frame, after = files.frames[indices[k]].frame;
+    if (after == before + 1) continue;
+    const std::string gap = files.name + ": frame(s) " + std::to_string(before + 1) +
+                            (after - 1 > before + 1 ? " to " + std::to_string(after - 1) : std::string()) +
+                            " missing (no image, disparity or detection file) between frames " +
+                            std::to_string(before) + " and " + std::to_string(after);
+    LogWarning() << gap;
+    result.messages.push_back(gap);
+  }
+
   const std::vector<LinkedTrack> linked =
       LinkSequenceTracks(directory, reader, options, indices, index_of_frame, &result);
   if (result.tracking.num_short_tracks > 0)

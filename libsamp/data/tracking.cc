@@ -10,6 +10,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/pose.h"
@@ -780,7 +781,7 @@ void OptionFields(OptionsJson& io, TrackerOptions& o) {
   io.Optional("robust_cues", o.robust_cues, false);  // added later: written when on
 }
 
-std::string TrackerOptions::ToJson() const { return OptionsToJson(*this).dump(); }
+std::string TrackerOptions::ToJson() const { return DumpJson(OptionsToJson(*this)); }
 
 std::string TrackingSummary::BriefReport() const {
   std::ostringstream s;
@@ -813,7 +814,7 @@ std::string TrackingSummary::ToJson() const {
                             {"short_track_detections", num_short_detections},
                             {"warnings", warnings}};
   if (num_duplicates > 0) j["duplicates"] = num_duplicates;  // added with duplicate flagging: only when some
-  return j.dump();
+  return DumpJson(j);
 }
 
 std::vector<int> SolveAssignment(const std::vector<double>& cost, int rows, int cols) {

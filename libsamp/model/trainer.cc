@@ -1,6 +1,7 @@
 #include "libsamp/model/trainer.h"
 
 #include <tbb/parallel_for.h>
+#include <sys/stat.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -340,10 +341,47 @@ TrainedShape TrainJobSdf(const TrainJob& job, const TrainOptions& options, std::
   return shape;
 }
 
+namespace {
+
+// Refuses outputs (the model file, the --sdf-dir files) that are inputs
+// (a mesh of the CAD folder, the manifest), by resolved path or by device
+// and inode (a hard link), before anything is computed.
+void CheckOutputsAreNotInputs(const TrainOptions& options, const std::vector<TrainJob>& jobs) {
+  auto resolved = [](const std::string& path) {
+    std::error_code ec;
+    const fs::path r = fs::weakly_canonical(fs::absolute(path), ec);
+    return ec ? fs::absolute(path).lexically_normal().string() : r.string();
+  };
+  std::map<std::string, std::string> inputs;  // resolved path or "inode dev:ino" -> what
+  auto add_input = [&](const std::string& path, const std::string& what) {
+    inputs.emplace(resolved(path), what);
+    struct stat st;
+    if (::stat(path.c_str(), &st) == 0)
+      inputs.emplace("inode " + std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino), what);
+  };
+  for (const TrainJob& job : jobs) add_input(job.path, "the input mesh " + job.path);
+  if (!options.manifest_path.empty()) add_input(options.manifest_path, "the manifest " + options.manifest_path);
+  auto check = [&](const std::string& what, const std::string& output) {
+    auto it = inputs.find(resolved(output));
+    struct stat st;
+    if (it == inputs.end() && ::stat(output.c_str(), &st) == 0)
+      it = inputs.find("inode " + std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino));
+    SAMP_CHECK(it == inputs.end()) << "train: the " << what << " " << output << " is " << it->second
+                                   << "; samp never writes over its inputs: give another output path";
+  };
+  check("model file", options.output_path);
+  if (!options.sdf_folder.empty()) {
+    for (const TrainJob& job : jobs) check("SDF file", (fs::path(options.sdf_folder) / (job.name + ".vdb")).string());
+  }
+}
+
+}  // namespace
+
 TrainSummary TrainShapeModel(const TrainOptions& options) {
   options.Check();
   const auto start = Clock::now();
   const std::vector<TrainJob> jobs = ListTrainJobs(options);
+  CheckOutputsAreNotInputs(options, jobs);
   const int num_jobs = int(jobs.size());
   LogInfo() << "training a shape model from " << num_jobs << " mesh files in "
             << options.cad_folder << " on the grid " << options.grid.ToString();

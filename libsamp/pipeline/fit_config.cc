@@ -1,3 +1,4 @@
+#include "libsamp/core/json_text.h"
 #include "libsamp/pipeline/fit_config.h"
 
 #include "libsamp/core/atomic_file.h"
@@ -121,7 +122,7 @@ void OptionFields(OptionsJson& io, RunFitOptions& o) {
 void WriteFitConfig(const std::string& path, const FitConfig& config) {
   nlohmann::json j = OptionsToJson(config.options);
   j["model_components"] = config.model_components;
-  WriteTextFileAtomically(path, j.dump(2) + "\n");
+  WriteTextFileAtomically(path, DumpJson(j, 2) + "\n");
 }
 
 FitConfig ReadFitConfig(const std::string& path) {

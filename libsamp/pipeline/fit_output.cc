@@ -1,3 +1,4 @@
+#include "libsamp/core/json_text.h"
 #include "libsamp/pipeline/fit_output.h"
 
 #include <algorithm>
@@ -224,7 +225,7 @@ void WriteTracksFile(const std::string& path, const TracksFile& file) {
     js["failed_tracks"] = r.failed_tracks;
     tracks_json["sequences"].push_back(js);
   }
-  WriteTextFileAtomically(path, tracks_json.dump(2) + "\n");
+  WriteTextFileAtomically(path, DumpJson(tracks_json, 2) + "\n");
 }
 
 TracksFile ReadTracksFile(const std::string& path) {

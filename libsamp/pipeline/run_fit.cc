@@ -67,49 +67,39 @@ struct SequenceWork {
   std::vector<TracksFileTrack> tracks;  // for tracks.json
 };
 
-// True when `path` is `folder` or inside it (both absolute and normal).
-bool IsWithin(fs::path path, fs::path folder) {
-  if (!path.has_filename() && path.has_parent_path()) path = path.parent_path();  // "a/b/"
-  if (!folder.has_filename() && folder.has_parent_path()) folder = folder.parent_path();
-  const fs::path relative = path.lexically_relative(folder);
-  return !relative.empty() && *relative.begin() != "..";
-}
-
-fs::path Resolved(const std::string& path) {
-  std::error_code ec;
-  fs::path resolved = fs::weakly_canonical(fs::absolute(path), ec);
-  if (ec) resolved = fs::absolute(path).lexically_normal();
-  return resolved;
-}
-
 // Refuses an output folder that RunFit must not replace as a whole; true when
-// it holds an earlier run (to be replaced).
+// it holds an earlier run (to be replaced). Inputs are compared by resolved
+// path and by device and inode (core/atomic_file.h IsInsideFolder, SameFile),
+// so a hard link, bind mount or symbolic link does not hide one.
 bool CheckOutputFolder(const RunFitOptions& options) {
   const std::string& out_name = options.output_dir;
-  const fs::path out = Resolved(out_name);
   const char* why = ": samp fit replaces its output folder as a whole at the end of the run";
-  auto refuse_input = [&](const std::string& what, const std::string& path) {
-    SAMP_CHECK(path.empty() || !IsWithin(Resolved(path), out))
+  std::vector<std::pair<std::string, std::string>> inputs;  // what, path
+  for (const std::string& seq : options.sequences) inputs.emplace_back("sequence", seq);
+  for (const std::string& labels : options.tracking_labels) inputs.emplace_back("tracking label file", labels);
+  if (!options.link_only) inputs.emplace_back("model", options.model_path);
+  for (const auto& [what, path] : inputs) {
+    SAMP_CHECK(path.empty() || !IsInsideFolder(path, out_name))
         << "output folder " << out_name << " holds the input " << what << " " << path << why
         << "; give an output folder outside the inputs";
-  };
-  for (const std::string& seq : options.sequences) refuse_input("sequence", seq);
-  for (const std::string& labels : options.tracking_labels) refuse_input("tracking label file", labels);
-  if (!options.link_only) refuse_input("model", options.model_path);
+  }
   std::error_code ec;
   const fs::path cwd = fs::current_path(ec);
-  SAMP_CHECK(ec || !IsWithin(cwd.lexically_normal(), out))
+  SAMP_CHECK(ec || !IsInsideFolder(cwd.string(), out_name))
       << "output folder " << out_name << " is the current folder or holds it" << why
       << "; give another folder";
-  const fs::file_status status = fs::status(out, ec);
-  if (!fs::exists(status)) return false;
-  SAMP_CHECK(fs::is_directory(status)) << "output folder " << out_name << " exists and is not a folder";
-  const bool empty = fs::is_empty(out, ec);
-  SAMP_CHECK(!ec) << "cannot list output folder " << out_name << ": " << ec.message();
-  SAMP_CHECK(empty || (fs::is_regular_file(out / "tracks.json", ec) && fs::is_regular_file(out / "config.json", ec)))
-      << "output folder " << out_name << " is not empty and not the output of a samp fit (it has no "
-      << "tracks.json and config.json)" << why << ", and replaces only its own; give a new or empty folder";
-  return !empty;
+  const bool earlier_run = CheckReplaceableOutputFolder(out_name, why);
+  if (earlier_run) {
+    // A file of the earlier run that is an input under another name (a hard link).
+    for (fs::recursive_directory_iterator it(out_name, ec), end; !ec && it != end; it.increment(ec)) {
+      for (const auto& [what, path] : inputs) {
+        SAMP_CHECK(path.empty() || !SameFile(it->path().string(), path))
+            << "output folder " << out_name << " holds the input " << what << " " << path << " as "
+            << it->path().string() << why << "; give an output folder outside the inputs";
+      }
+    }
+  }
+  return earlier_run;
 }
 
 // Refuses two sequences whose outputs would have the same name.
@@ -369,6 +359,10 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   std::ostringstream failure;
   if (summary.num_sequences_failed == int(summary.sequences.size())) {
     failure << "every sequence failed";
+  } else if (summary.num_sequences_failed > 0) {
+    failure << summary.num_sequences_failed << " of " << summary.sequences.size() << " sequences failed:";
+    for (const auto& q : summary.sequences)
+      if (!q.ok) failure << " " << q.directory;
   } else if (!options.link_only && summary.num_tracks_fitted == 0 && num_detections > 0) {
     failure << "no track was fitted although the input had " << num_detections << " detection(s)";
     if (summary.num_tracks_failed > 0) failure << "; every track failed (" << summary.num_tracks_failed << ")";
@@ -376,6 +370,14 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   }
   summary.failure = failure.str();
   if (summary.failure.empty() && options.before_commit) options.before_commit(folder);
+  if (!summary.failure.empty() && earlier_run) {
+    // A failed run never replaces a good one: the earlier output stays.
+    summary.kept_previous_output = true;
+    LogWarning() << "the run failed (" << summary.failure << "): " << options.output_dir
+                 << " keeps the output of the earlier run";
+    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return summary;
+  }
   staged.Commit();
   summary.replaced_previous_output = earlier_run && staged.replaced();
   if (summary.replaced_previous_output) LogInfo() << "replaced " << options.output_dir << ", the output of an earlier run";

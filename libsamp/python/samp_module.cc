@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_fields.h"
@@ -51,7 +52,7 @@ namespace {
 // An options struct whose fields are listed by OptionFields (core/json_fields.h).
 template <typename S>
 struct FieldTableCodec {
-  static std::string ToJson(const S& o) { return OptionsToJson(o).dump(); }
+  static std::string ToJson(const S& o) { return DumpJson(OptionsToJson(o)); }
   static S FromJson(const std::string& text, const std::string& source) {
     const nlohmann::json j = ParseJson(text, source);
     const JsonFields fields(j, source);
@@ -71,7 +72,7 @@ struct TrainCodec {
     j["sdf_folder"] = o.sdf_folder;
     j["num_threads"] = o.num_threads;
     j["show_progress"] = o.show_progress;
-    return j.dump();
+    return DumpJson(j);
   }
   static TrainOptions FromJson(const std::string& text, const std::string& source) {
     nlohmann::json j = ParseJson(text, source);
@@ -81,7 +82,7 @@ struct TrainCodec {
     const std::string output = fields.Get<std::string>("output");
     const std::string sdf_folder = fields.Get<std::string>("sdf_folder");
     for (const char* key : {"num_threads", "show_progress", "output", "sdf_folder"}) j.erase(key);
-    TrainOptions o = TrainOptionsFromJson(j.dump(), source);
+    TrainOptions o = TrainOptionsFromJson(DumpJson(j), source);
     o.output_path = output;
     o.sdf_folder = sdf_folder;
     o.num_threads = num_threads;

@@ -258,6 +258,9 @@ void RegisterFitCommand(CLI::App* app) {
     }
     const RunFitSummary summary = RunFit(*options);
     std::cout << summary.BriefReport() << std::endl;
+    if (summary.kept_previous_output) {
+      SAMP_THROW() << summary.failure << "; " << options->output_dir << " keeps the earlier run's output";
+    }
     std::cout << "wrote " << options->output_dir << std::endl;
     if (!summary.failure.empty()) SAMP_THROW() << summary.failure;
     if (!visuals_report.empty()) std::cout << visuals_report << std::endl;
