@@ -4,5 +4,10 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${SAMP_BUILD_DIR:-$root/build}"
 bash "$root/tools/install_deps.sh"
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release ${SAMP_CMAKE_ARGS:-}
+# ccache, when installed, keeps rebuilds of unchanged sources cheap (SAMP_NO_CCACHE=1: off).
+launcher=()
+if [ -z "${SAMP_NO_CCACHE:-}" ] && command -v ccache >/dev/null; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" ${SAMP_CMAKE_ARGS:-}
 cmake --build "$build" -j "$(nproc)"

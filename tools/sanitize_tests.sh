@@ -15,7 +15,11 @@ if ! command -v clang++ >/dev/null; then
   sudo_cmd=(); [ "$(id -u)" -eq 0 ] || sudo_cmd=(sudo)
   "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends clang libclang-rt-dev
 fi
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ \
+launcher=()
+if [ -z "${SAMP_NO_CCACHE:-}" ] && command -v ccache >/dev/null; then
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+fi
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER=clang++ "${launcher[@]}" \
   "-DSAMP_SANITIZE=address;undefined" -DSAMP_FUZZ=ON -DSAMP_BUILD_BENCHMARKS=OFF ${SAMP_CMAKE_ARGS:-}
 if [ "${1:-}" = "--configure-only" ]; then exit 0; fi
 cmake --build "$build" -j "$(nproc)" ${SAMP_SANITIZE_TARGETS:+--target $SAMP_SANITIZE_TARGETS}
