@@ -119,6 +119,20 @@ def _progress_line(done, total, failed, start):
         "#" * filled, "." * (width - filled), done, total, failed, time.time() - start)
 
 
+def _remove_dead_staging(out_root, names):
+    """Removes the staging folders (".tmp.<pid>.<n>.<name>", core/atomic_file.h)
+    of this batch's sequences that a killed worker left in OUT. Called when every
+    task has finished, so no live writer owns one; other folders are not touched."""
+    import re
+    import shutil
+    pattern = re.compile(r"^\.tmp\.\d+\.\d+\.(.+)$")
+    wanted = set(names)
+    for entry in os.listdir(out_root):
+        m = pattern.match(entry)
+        if m and m.group(1) in wanted:
+            shutil.rmtree(os.path.join(out_root, entry), ignore_errors=True)
+
+
 def run_fit_batch(args, out=sys.stdout, err=sys.stderr):
     from distributed import as_completed
 
@@ -158,6 +172,7 @@ def run_fit_batch(args, out=sys.stdout, err=sys.stderr):
         client.close()
         if cluster is not None:
             cluster.close()
+    _remove_dead_staging(args.out, names)
     failures = [(n, results[n]["failure"]) for n in names if results[n]["failure"]]
     fitted = sum(results[n]["num_tracks_fitted"] for n in names)
     out.write("%d sequence(s) (%d failed), %d track(s) fitted, %.1f s\n" % (
