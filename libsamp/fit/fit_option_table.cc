@@ -137,4 +137,7 @@ const OptionTable<FitOptions>& FitOptionTable() {
 void OptionFields(OptionsJson& io, MotionNoise& o) { MotionNoiseOptionTable().Json(io, o); }
 void OptionFields(OptionsJson& io, FitOptions& o) { FitOptionTable().Json(io, o); }
 
+void MotionNoise::Check() const { MotionNoiseOptionTable().Check(*this); }
+void FitOptions::Check() const { FitOptionTable().Check(*this); }
+
 }  // namespace samp
