@@ -8,7 +8,7 @@
 #   --runs N      also stop a target after N executions (libFuzzer -runs)
 #   --work DIR    working folder: corpus copies, findings, logs
 #                 (default ${SAMP_DATA_DIR:-~/.cache/samp}/fuzz)
-#   TARGET        model_loader model_payload kitti_text mesh manifest (default: all)
+#   TARGET        model_loader model_payload kitti_text mesh manifest png (default: all)
 #
 # Each target starts from a copy of tests/fuzz/corpus/TARGET (the repository's
 # seeds are not modified) under a 1024 MB RSS limit, inputs up to 2 MB. A crash,
@@ -34,7 +34,7 @@ while [ $# -gt 0 ]; do
     *) targets+=("$1"); shift ;;
   esac
 done
-[ ${#targets[@]} -gt 0 ] || targets=(model_loader model_payload kitti_text mesh manifest)
+[ ${#targets[@]} -gt 0 ] || targets=(model_loader model_payload kitti_text mesh manifest png)
 case "$seconds" in ''|*[!0-9]*) echo "fuzz.sh: --seconds needs a whole number" >&2; exit 2 ;; esac
 case "$runs_limit" in *[!0-9]*) echo "fuzz.sh: --runs needs a whole number" >&2; exit 2 ;; esac
 

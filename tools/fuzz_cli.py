@@ -3,8 +3,10 @@
 
 Runs `samp inspect MUTANT` (or another samp command line with {} for the
 file) on N mutants of a model file and checks each run: exit status 0 or 1
-(1 = samp's one-line "samp: error: ..."), never a signal, "unexpected error"
-(exit 2), a sanitizer report or more peak memory than --max-rss-mb. Mutations
+(1 = samp's one-line "samp: error: ..."), never a signal, exit 2 (a usage
+error, which these runs never make), "samp: error: internal error" (an
+exception other than samp::Error), a sanitizer report or more peak memory
+than --max-rss-mb. Mutations
 (seeded): flipped bits, random bytes, runs overwritten, cut files, inserted
 and deleted bytes, edited metadata numbers (grid dims, counts), the payload
 duplicated. With --reseal each mutant's samp_file_bytes and
@@ -147,6 +149,8 @@ def run_one(args, index, data, work):
         finding = "sanitizer report"
     elif proc.returncode == 1 and not err.startswith("samp: error: "):
         finding = "error without samp's one-line message"
+    elif proc.returncode == 1 and err.startswith("samp: error: internal error"):
+        finding = "internal error (an exception other than samp::Error)"
     elif rss_mb > args.max_rss_mb:
         finding = f"peak RSS {rss_mb:.0f} MB"
     if finding:

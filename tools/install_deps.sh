@@ -13,6 +13,9 @@ packages=(
   # The HTML viewers embed Debian's three.js at build time (docs/fitting.md, "Viewer");
   # the browser test (tests/viz/html_viewer_test.cc) opens them in headless Chromium.
   libjs-three chromium
+  # The Python package samp (libsamp/python, docs/python.md): pybind11 bindings for
+  # Debian's python3, its tests (pytest), the Dask batch driver and the plotting example.
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-distributed python3-matplotlib
 )
 
 missing=()

@@ -6,13 +6,19 @@
 #include <stdio.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <mutex>
+#include <random>
+#include <sstream>
+#include <sys/stat.h>
+#include <vector>
 #include <set>
 
 #include "libsamp/core/error.h"
@@ -199,8 +205,14 @@ void RemoveOrphanTemporariesOnce(const std::string& folder) {
   if (cleaned_folders.insert(folder).second) RemoveOrphanTemporaries(folder);
 }
 
+// ".tmp.<pid>.<n>.<name>", cut to a file name's 255 bytes: a long `name`
+// (241-255 bytes, which the target itself may have) keeps its end, so that
+// the temporary still has the target's extension.
 std::string TemporaryName(const std::string& name) {
-  return ".tmp." + std::to_string(::getpid()) + "." + std::to_string(g_counter++) + "." + name;
+  constexpr size_t kMaxFileName = 255;
+  const std::string prefix = ".tmp." + std::to_string(::getpid()) + "." + std::to_string(g_counter++) + ".";
+  const size_t room = kMaxFileName - prefix.size();
+  return prefix + (name.size() <= room ? name : name.substr(name.size() - room));
 }
 
 }  // namespace
@@ -215,6 +227,60 @@ void RemoveTemporariesOnSignal() {
     for (int signal_number : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(signal_number, &action, nullptr);
   });
 }
+
+void WriteBytesChecked(const std::string& path, const std::string& bytes, const std::string& name_for_errors) {
+  const std::string& name = name_for_errors.empty() ? path : name_for_errors;
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  SAMP_CHECK(fd >= 0) << "cannot write " << name << ": cannot create " << path << ": " << std::strerror(errno);
+  auto fail = [&](const char* step, int error) {
+    ::close(fd);
+    SAMP_THROW() << "cannot write " << name << ": " << step << " " << path << " failed after "
+                 << "writing part of its " << bytes.size() << " bytes: " << std::strerror(error);
+  };
+  size_t written = 0;
+  while (written < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("write to", errno);
+    }
+    if (n == 0) fail("write to", EIO);  // no progress and no error: do not loop forever
+    written += size_t(n);
+  }
+  if (::fsync(fd) != 0) fail("fsync of", errno);
+  if (::close(fd) != 0) {
+    SAMP_THROW() << "cannot write " << name << ": close of " << path << " failed: " << std::strerror(errno);
+  }
+}
+
+namespace {
+
+// fsync(path) as a check of a file another library wrote: errors of delayed
+// writes (ENOSPC, EIO) surface here at the latest.
+void SyncFileChecked(const std::string& path, const std::string& name) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  SAMP_CHECK(fd >= 0) << "cannot write " << name << ": cannot reopen " << path << ": " << std::strerror(errno);
+  if (::fsync(fd) != 0) {
+    const int error = errno;
+    ::close(fd);
+    SAMP_THROW() << "cannot write " << name << ": fsync of " << path << " failed: " << std::strerror(error);
+  }
+  SAMP_CHECK(::close(fd) == 0) << "cannot write " << name << ": close of " << path
+                               << " failed: " << std::strerror(errno);
+}
+
+// fsync of the folder after a rename into it (so that the new name survives
+// a crash); best effort: a failure is a warning, the file is in place.
+void SyncFolder(const std::string& folder) {
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  if (::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) {
+    LogWarning() << "fsync of folder " << folder << " failed: " << std::strerror(errno);
+  }
+  ::close(fd);
+}
+
+}  // namespace
 
 void WriteFileAtomically(const std::string& path,
                          const std::function<void(const std::string&)>& writer) {
@@ -238,8 +304,10 @@ void WriteFileAtomically(const std::string& path,
   try {
     writer(temporary);
     SAMP_CHECK(fs::exists(temporary)) << "writer did not create " << temporary;
+    SyncFileChecked(temporary, path);
     fs::rename(temporary, target, ec);
     SAMP_CHECK(!ec) << "cannot rename " << temporary << " to " << path << ": " << ec.message();
+    SyncFolder(folder);
   } catch (...) {
     std::error_code ignored;
     fs::remove(temporary, ignored);
@@ -249,14 +317,16 @@ void WriteFileAtomically(const std::string& path,
   UnregisterTemporary(slot);
 }
 
-void WriteTextFileAtomically(const std::string& path, const std::string& contents) {
+void WriteBytesAtomically(const std::string& path, const std::string& bytes,
+                          const std::function<void(const std::string&)>& verify) {
   WriteFileAtomically(path, [&](const std::string& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    SAMP_CHECK(out) << "cannot open " << temporary << " for writing";
-    out << contents;
-    out.close();
-    SAMP_CHECK(out) << "error writing " << temporary;
+    WriteBytesChecked(temporary, bytes, path);
+    if (verify) verify(temporary);
   });
+}
+
+void WriteTextFileAtomically(const std::string& path, const std::string& contents) {
+  WriteBytesAtomically(path, contents);
 }
 
 StagedFolder::StagedFolder(const std::string& target) {
@@ -306,8 +376,139 @@ StagedFolder::~StagedFolder() {
   UnregisterTemporary(slot_);
 }
 
+namespace {
+
+// Relative paths of every file (not folder) under `folder`, sorted.
+std::vector<std::string> ListFilesRecursively(const fs::path& folder) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code type_ec;
+    if (it->is_directory(type_ec) && !it->is_symlink(type_ec)) continue;
+    files.push_back(it->path().lexically_relative(folder).generic_string());
+  }
+  SAMP_CHECK(!ec) << "cannot list folder " << folder.string() << ": " << ec.message();
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::string RandomRunId() {
+  std::random_device device;
+  std::ostringstream id;
+  for (int i = 0; i < 4; ++i) {
+    char part[9];
+    std::snprintf(part, sizeof(part), "%08x", unsigned(device()));
+    id << part;
+  }
+  return id.str();
+}
+
+constexpr char kMarkerFirstLine[] = "samp output folder";
+
+}  // namespace
+
+bool CheckReplaceableOutputFolder(const std::string& folder, const std::string& why) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(folder, ec);
+  if (!fs::exists(status)) return false;
+  SAMP_CHECK(fs::is_directory(status)) << "output folder " << folder << " exists and is not a folder" << why;
+  const bool empty = fs::is_empty(folder, ec);
+  SAMP_CHECK(!ec) << "cannot list output folder " << folder << ": " << ec.message();
+  if (empty) return false;
+  const fs::path marker = fs::path(folder) / kOutputFolderMarker;
+  std::set<std::string> listed;
+  bool valid = false;
+  if (fs::is_regular_file(fs::symlink_status(marker, ec))) {
+    std::ifstream in(marker, std::ios::binary);
+    std::string line;
+    valid = std::getline(in, line) && line == kMarkerFirstLine && std::getline(in, line) &&
+            line.rfind("run_id ", 0) == 0;
+    while (valid && std::getline(in, line)) {
+      if (line.rfind("file ", 0) == 0) listed.insert(line.substr(5));
+    }
+  }
+  SAMP_CHECK(valid) << "output folder " << folder << " is not empty and was not made by samp (it has no valid "
+                    << kOutputFolderMarker << " marker file)" << why
+                    << "; samp replaces only folders it made: give a new or empty folder";
+  std::vector<std::string> foreign;
+  for (const std::string& file : ListFilesRecursively(folder)) {
+    if (file != kOutputFolderMarker && listed.count(file) == 0) foreign.push_back(file);
+  }
+  if (!foreign.empty()) {
+    std::ostringstream list;
+    for (size_t i = 0; i < foreign.size() && i < 20; ++i) list << (i ? ", " : "") << foreign[i];
+    if (foreign.size() > 20) list << " and " << foreign.size() - 20 << " more";
+    SAMP_THROW() << "output folder " << folder << " holds " << foreign.size()
+                 << " file(s) samp did not write: " << list.str() << why
+                 << "; samp replaces only folders it made: move them away or give another folder";
+  }
+  return true;
+}
+
+void RecordInOutputFolder(const std::string& folder, const std::vector<std::string>& files) {
+  const fs::path marker = fs::path(folder) / kOutputFolderMarker;
+  std::error_code ec;
+  if (!fs::is_regular_file(fs::symlink_status(marker, ec))) return;
+  std::ifstream in(marker, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (text.rfind(std::string(kMarkerFirstLine) + "\nrun_id ", 0) != 0) return;
+  std::set<std::string> listed;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("file ", 0) == 0) listed.insert(line.substr(5));
+  }
+  const fs::path base = fs::weakly_canonical(fs::absolute(folder), ec);
+  bool added = false;
+  for (const std::string& file : files) {
+    const fs::path relative = fs::weakly_canonical(fs::absolute(file), ec).lexically_relative(base);
+    if (ec || relative.empty() || *relative.begin() == ".." || relative == kOutputFolderMarker) continue;
+    if (listed.insert(relative.generic_string()).second) {
+      if (!text.empty() && text.back() != '\n') text += '\n';
+      text += "file " + relative.generic_string() + "\n";
+      added = true;
+    }
+  }
+  if (added) WriteTextFileAtomically(marker.string(), text);
+}
+
+bool SameFile(const std::string& a, const std::string& b) {
+  struct stat sa, sb;
+  if (::stat(a.c_str(), &sa) != 0 || ::stat(b.c_str(), &sb) != 0) return false;
+  return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+bool IsInsideFolder(const std::string& path, const std::string& folder) {
+  std::error_code ec;
+  fs::path resolved = fs::weakly_canonical(fs::absolute(path), ec);
+  if (ec) resolved = fs::absolute(path).lexically_normal();
+  fs::path resolved_folder = fs::weakly_canonical(fs::absolute(folder), ec);
+  if (ec) resolved_folder = fs::absolute(folder).lexically_normal();
+  const fs::path relative = resolved.lexically_relative(resolved_folder);
+  if (!relative.empty() && *relative.begin() != "..") return true;
+  struct stat folder_stat;
+  if (::stat(resolved_folder.c_str(), &folder_stat) != 0) return false;
+  for (fs::path p = resolved;; p = p.parent_path()) {
+    struct stat s;
+    if (::stat(p.c_str(), &s) == 0 && s.st_dev == folder_stat.st_dev && s.st_ino == folder_stat.st_ino) return true;
+    if (!p.has_relative_path()) break;
+  }
+  return false;
+}
+
 void StagedFolder::Commit() {
   SAMP_CHECK(!committed_) << "StagedFolder " << target_ << ": committed twice";
+  {
+    // The marker lists every file of the run: a later run replaces the folder
+    // only while it holds nothing else.
+    run_id_ = RandomRunId();
+    std::ostringstream marker;
+    marker << kMarkerFirstLine << "\nrun_id " << run_id_ << "\n";
+    for (const std::string& file : ListFilesRecursively(path_)) {
+      if (file != kOutputFolderMarker) marker << "file " << file << "\n";
+    }
+    WriteBytesChecked((fs::path(path_) / kOutputFolderMarker).string(), marker.str(),
+                      (fs::path(target_) / kOutputFolderMarker).string());
+  }
   std::error_code ec;
   const fs::file_status status = fs::symlink_status(target_, ec);
   SAMP_CHECK(!fs::exists(status) || fs::is_directory(status))

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/error.h"
 
 namespace samp {
@@ -34,7 +35,7 @@ class JsonFields {
       return value.get<T>();
     } catch (const nlohmann::json::exception&) {
       SAMP_THROW() << Where() << ": key '" << key << "' has the wrong type (" << value.type_name() << ": "
-                   << value.dump() << ")";
+                   << DumpJson(value) << ")";
     }
   }
   template <typename T>
@@ -77,6 +78,17 @@ class OptionsJson {
       (*out_)[key] = value;
     } else {
       in_->Read(key, &value);
+    }
+  }
+  // A field added after the format settled: written only when it differs from
+  // `default_value` (outputs of runs that do not use it stay as they were),
+  // read when present and `default_value` otherwise.
+  template <typename T>
+  void Optional(const std::string& key, T& value, const T& default_value) {
+    if (writing()) {
+      if (!(value == default_value)) (*out_)[key] = value;
+    } else {
+      value = in_->Has(key) ? in_->Get<T>(key) : default_value;
     }
   }
   // An enum written by its name: to_name(value) -> const char*, from_name(std::string) -> E

@@ -157,6 +157,18 @@ class OptionTable {
     return Entry(this, fields_.size() - 1);
   }
 
+  // As Add, but the JSON holds the field only when it differs from its default,
+  // so that files written before the field existed keep their bytes.
+  template <typename T>
+  Entry AddOptional(const std::string& name, T S::*member, std::string help) {
+    Entry entry = Add(name, member, std::move(help));
+    const T default_value = S{}.*member;
+    json_.back() = [member, name, default_value](OptionsJson& io, S& s) {
+      io.Optional(name, s.*member, default_value);
+    };
+    return entry;
+  }
+
   // An enum written by its name (to_name(E) -> const char*, from_name(std::string) -> E).
   template <typename E>
   Entry AddChoice(const std::string& name, E S::*member, const char* (*to_name)(E),

@@ -13,7 +13,7 @@ namespace samp {
 namespace {
 
 template <typename T>
-void Put(std::ofstream& out, const T& value) {
+void Put(std::ostream& out, const T& value) {
   out.write(reinterpret_cast<const char*>(&value), sizeof(T));
 }
 
@@ -31,17 +31,11 @@ size_t SafeFirstVertex(const std::vector<Eigen::Vector3f>& points) {
   return 0;
 }
 
-void Finish(std::ofstream& out, const std::string& path) {
-  out.close();
-  SAMP_CHECK(out) << "error writing " << path;
-}
-
 }  // namespace
 
 void WritePly(const std::string& path, const Mesh& mesh) {
-  WriteFileAtomically(path, [&](const std::string& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    SAMP_CHECK(out) << "cannot open " << temporary << " for writing";
+  {
+    std::ostringstream out(std::ios::binary);
     out << "ply\nformat binary_little_endian 1.0\ncomment samp mesh, object frame, metres\n"
         << "element vertex " << mesh.vertices.size() << "\n"
         << "property float x\nproperty float y\nproperty float z\n"
@@ -57,8 +51,8 @@ void WritePly(const std::string& path, const Mesh& mesh) {
       Put(out, uint8_t(3));
       for (int a = 0; a < 3; ++a) Put(out, int32_t(position(t[a])));
     }
-    Finish(out, temporary);
-  });
+    WriteBytesAtomically(path, out.str());
+  }
 }
 
 void WritePly(const std::string& path, const PointCloud& cloud) {
@@ -66,9 +60,8 @@ void WritePly(const std::string& path, const PointCloud& cloud) {
   SAMP_CHECK(!has_colors || cloud.colors.size() == cloud.points.size())
       << "point cloud has " << cloud.colors.size() << " colours for " << cloud.points.size()
       << " points";
-  WriteFileAtomically(path, [&](const std::string& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    SAMP_CHECK(out) << "cannot open " << temporary << " for writing";
+  {
+    std::ostringstream out(std::ios::binary);
     out << "ply\nformat binary_little_endian 1.0\ncomment samp points, metres\n"
         << "element vertex " << cloud.points.size() << "\n"
         << "property float x\nproperty float y\nproperty float z\n";
@@ -82,8 +75,8 @@ void WritePly(const std::string& path, const PointCloud& cloud) {
         for (int a = 0; a < 3; ++a) Put(out, cloud.colors[i][a]);
       }
     }
-    Finish(out, temporary);
-  });
+    WriteBytesAtomically(path, out.str());
+  }
 }
 
 PointCloud ReadPointCloudPly(const std::string& path) {

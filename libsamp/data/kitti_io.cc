@@ -4,6 +4,8 @@
 #include <cctype>
 #include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <functional>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -26,16 +28,48 @@ struct TextFile {
   std::vector<std::string> lines;
 };
 
-TextFile ReadTextFile(const std::string& path, const char* what) {
-  std::ifstream stream(path);
+// Text files are streamed line by line (a 100 MB poses file once took
+// 913 MB as a vector of lines); a line longer than kMaxLineBytes is an error
+// naming the file and line, so memory stays bounded by what is parsed.
+constexpr size_t kMaxLineBytes = size_t(1) << 20;
+// Calibration and plane files are read whole; they hold a few lines.
+constexpr size_t kMaxSmallTextBytes = size_t(1) << 20;
+
+void ForEachLine(const std::string& path, const char* what,
+                 const std::function<void(int line_number, const std::string& line)>& f) {
+  std::ifstream stream(path, std::ios::binary);
   SAMP_CHECK(stream.good()) << "cannot open " << what << " file " << path;
-  TextFile file{path, {}};
+  std::streambuf* buffer = stream.rdbuf();
   std::string line;
-  while (std::getline(stream, line)) {
+  int line_number = 0;
+  for (;;) {
+    line.clear();
+    bool any = false;
+    for (int c; (c = buffer->sbumpc()) != std::char_traits<char>::eof();) {
+      any = true;
+      if (c == '\n') break;
+      line.push_back(char(c));
+      SAMP_CHECK(line.size() <= kMaxLineBytes)
+          << path << ":" << line_number + 1 << ": line longer than " << kMaxLineBytes << " bytes: not a " << what
+          << " file";
+    }
+    if (!any) break;
+    ++line_number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    file.lines.push_back(line);
+    f(line_number, line);
   }
   SAMP_CHECK(!stream.bad()) << "error reading " << what << " file " << path;
+}
+
+TextFile ReadTextFile(const std::string& path, const char* what) {
+  TextFile file{path, {}};
+  size_t bytes = 0;
+  ForEachLine(path, what, [&](int, const std::string& line) {
+    bytes += line.size() + 1;
+    SAMP_CHECK(bytes <= kMaxSmallTextBytes)
+        << path << ": more than " << kMaxSmallTextBytes << " bytes: not a " << what << " file";
+    file.lines.push_back(line);
+  });
   return file;
 }
 
@@ -51,6 +85,13 @@ bool IsBlank(const std::string& line) {
   return std::all_of(line.begin(), line.end(), [](unsigned char c) { return std::isspace(c); });
 }
 
+// Plausibility bounds of a label line (docs/reliability.md): loose on purpose,
+// they refuse garbage, not unusual cars.
+constexpr double kMaxLabelPixel = 1e5;        // |2D box coordinate|, px
+constexpr double kMaxObjectSize = 50.0;       // h, w, l, m
+constexpr double kMaxObjectDistance = 1e4;    // |x|, |y|, |z| of the location, m
+constexpr double kMaxRotationY = 4 * 3.14159265358979323846;  // |rotation_y|, |alpha|, rad
+
 // Location prefix of messages: "path:line: ".
 std::string At(const std::string& path, int line_number) {
   return path + ":" + std::to_string(line_number) + ": ";
@@ -63,7 +104,9 @@ double ParseDouble(const std::string& token, const std::string& path, int line_n
   const double value = std::strtod(token.c_str(), &end);
   SAMP_CHECK(end != token.c_str() && *end == '\0')
       << At(path, line_number) << field << " '" << token << "' is not a number";
-  SAMP_CHECK(std::isfinite(value) && errno != ERANGE)
+  // ERANGE on underflow (a subnormal such as -4e-320, or a value that
+  // rounds to 0) is a finite number; only an overflow to HUGE_VAL is not.
+  SAMP_CHECK(std::isfinite(value) && !(errno == ERANGE && std::abs(value) == HUGE_VAL))
       << At(path, line_number) << field << " '" << token << "' is not a finite number";
   return value;
 }
@@ -116,6 +159,22 @@ ObjectLabel ParseObject(const std::vector<std::string>& tokens, size_t first,
       << label.length;
   SAMP_CHECK(label.position.z() > 0)
       << At(p, n) << "object at z = " << label.position.z() << " m is behind the camera";
+  // Plausibility (docs/reliability.md, "Plausibility checks"): values that
+  // parse but describe no car in a camera image.
+  for (int i = 0; i < 4; ++i) {
+    SAMP_CHECK(std::abs(label.box_2d[i]) <= kMaxLabelPixel)
+        << At(p, n) << "2D box coordinate " << label.box_2d[i] << " px is beyond +-" << kMaxLabelPixel
+        << " px: not a box in an image";
+  }
+  SAMP_CHECK(label.height <= kMaxObjectSize && label.width <= kMaxObjectSize && label.length <= kMaxObjectSize)
+      << At(p, n) << "object size h w l = " << label.height << " " << label.width << " " << label.length
+      << " m: more than " << kMaxObjectSize << " m";
+  SAMP_CHECK(label.position.cwiseAbs().maxCoeff() <= kMaxObjectDistance)
+      << At(p, n) << "object location (" << label.position.transpose() << ") is more than "
+      << kMaxObjectDistance << " m from the camera";
+  SAMP_CHECK(std::abs(label.rotation_y) <= kMaxRotationY && std::abs(label.alpha) <= kMaxRotationY)
+      << At(p, n) << "rotation_y " << label.rotation_y << " / alpha " << label.alpha
+      << " is beyond +-" << kMaxRotationY << " rad (KITTI's are within +-pi)";
   return label;
 }
 
@@ -257,27 +316,23 @@ void WriteCalibration(const std::string& path, const StereoCalibration& calibrat
 }
 
 std::vector<ObjectLabel> ReadLabels(const std::string& path) {
-  const TextFile file = ReadTextFile(path, "label");
   std::vector<ObjectLabel> labels;
-  for (size_t i = 0; i < file.lines.size(); ++i) {
-    const int n = static_cast<int>(i) + 1;
-    if (IsBlank(file.lines[i])) continue;
-    const std::vector<std::string> tokens = Tokenize(file.lines[i]);
+  ForEachLine(path, "label", [&](int n, const std::string& line) {
+    if (IsBlank(line)) return;
+    const std::vector<std::string> tokens = Tokenize(line);
     SAMP_CHECK(tokens.size() == 15 || tokens.size() == 16)
         << At(path, n) << tokens.size()
         << " columns, expected 15 or 16 (type trunc occ alpha x1 y1 x2 y2 h w l x y z ry [score])";
     labels.push_back(ParseObject(tokens, 0, path, n));
-  }
+  });
   return labels;
 }
 
 std::vector<ObjectLabel> ReadTrackingLabels(const std::string& path) {
-  const TextFile file = ReadTextFile(path, "tracking label");
   std::vector<ObjectLabel> labels;
-  for (size_t i = 0; i < file.lines.size(); ++i) {
-    const int n = static_cast<int>(i) + 1;
-    if (IsBlank(file.lines[i])) continue;
-    const std::vector<std::string> tokens = Tokenize(file.lines[i]);
+  ForEachLine(path, "tracking label", [&](int n, const std::string& line) {
+    if (IsBlank(line)) return;
+    const std::vector<std::string> tokens = Tokenize(line);
     SAMP_CHECK(tokens.size() == 17 || tokens.size() == 18)
         << At(path, n) << tokens.size()
         << " columns, expected 17 or 18 (frame track_id type trunc occ alpha x1 y1 x2 y2 h w l x y "
@@ -290,7 +345,7 @@ std::vector<ObjectLabel> ReadTrackingLabels(const std::string& path) {
     label.frame = frame;
     label.track_id = track_id;
     labels.push_back(label);
-  }
+  });
   return labels;
 }
 
@@ -350,8 +405,10 @@ Eigen::Vector4d ReadPlane(const std::string& path) {
     LogDebug() << path << ": plane normal points down, flipped";
     plane = -plane;
   }
-  SAMP_CHECK(plane[1] < -0.5) << At(path, n) << "plane normal (" << plane.head<3>().transpose()
-                              << ") is far from vertical: not a road plane";
+  const double tilt_deg = std::acos(std::min(1.0, -plane[1])) * 180.0 / 3.14159265358979323846;
+  SAMP_CHECK(tilt_deg <= kMaxPlaneTiltDeg)
+      << At(path, n) << "plane normal (" << plane.head<3>().transpose() << ") is tilted " << tilt_deg
+      << " deg from the camera's vertical, more than " << kMaxPlaneTiltDeg << " deg: not a road plane";
   return plane;
 }
 
@@ -365,17 +422,15 @@ void WritePlane(const std::string& path, const Eigen::Vector4d& plane) {
 }
 
 std::vector<Eigen::Isometry3d> ReadPoses(const std::string& path) {
-  const TextFile file = ReadTextFile(path, "poses");
   std::vector<Eigen::Isometry3d> poses;
-  for (size_t i = 0; i < file.lines.size(); ++i) {
-    const int n = static_cast<int>(i) + 1;
-    if (IsBlank(file.lines[i])) {
-      // Only trailing blank lines are allowed: a blank line would shift frame numbers.
-      for (size_t j = i; j < file.lines.size(); ++j)
-        SAMP_CHECK(IsBlank(file.lines[j])) << At(path, n) << "blank line inside the poses (one line per frame)";
-      break;
+  int first_blank = 0;  // only trailing blank lines: a blank line would shift frame numbers
+  ForEachLine(path, "poses", [&](int n, const std::string& line) {
+    if (IsBlank(line)) {
+      if (first_blank == 0) first_blank = n;
+      return;
     }
-    const std::vector<std::string> tokens = Tokenize(file.lines[i]);
+    SAMP_CHECK(first_blank == 0) << At(path, first_blank) << "blank line inside the poses (one line per frame)";
+    const std::vector<std::string> tokens = Tokenize(line);
     SAMP_CHECK(tokens.size() == 12) << At(path, n) << tokens.size()
                                     << " numbers, expected 12 (3x4 row-major [R|t])";
     Eigen::Matrix<double, 3, 4> m;
@@ -394,7 +449,7 @@ std::vector<Eigen::Isometry3d> ReadPoses(const std::string& path) {
         << At(path, n) << "translation (" << pose.translation().transpose() << ") m, |t| = "
         << pose.translation().norm() << " m, is not an ego pose (|t| > " << kMaxPoseTranslation << " m)";
     poses.push_back(pose);
-  }
+  });
   SAMP_CHECK(!poses.empty()) << path << ": no poses";
   return poses;
 }
@@ -408,13 +463,60 @@ void WritePoses(const std::string& path, const std::vector<Eigen::Isometry3d>& w
   WriteTextFileAtomically(path, text);
 }
 
-cv::Mat ReadDisparity(const std::string& path, const cv::Size& expected_size) {
-  {
-    std::ifstream probe(path);
-    SAMP_CHECK(probe.good()) << "cannot open disparity file " << path;
+PngHeader ReadPngHeader(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  SAMP_CHECK(in.good()) << "cannot open " << path;
+  unsigned char bytes[33];
+  in.read(reinterpret_cast<char*>(bytes), sizeof(bytes));
+  const std::streamsize got = in.gcount();
+  static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  SAMP_CHECK(got >= 8 && std::memcmp(bytes, kSignature, 8) == 0) << path << ": not a PNG file (no PNG signature)";
+  SAMP_CHECK(got == 33) << path << ": PNG file cut before the end of its header (" << got << " bytes)";
+  auto u32 = [&](int at) {
+    return (uint32_t(bytes[at]) << 24) | (uint32_t(bytes[at + 1]) << 16) | (uint32_t(bytes[at + 2]) << 8) |
+           uint32_t(bytes[at + 3]);
+  };
+  SAMP_CHECK(u32(8) == 13 && std::memcmp(bytes + 12, "IHDR", 4) == 0)
+      << path << ": PNG file without an IHDR chunk of 13 bytes first";
+  PngHeader header;
+  header.width = u32(16);
+  header.height = u32(20);
+  header.bit_depth = bytes[24];
+  const int colour_type = bytes[25];
+  SAMP_CHECK(header.width >= 1 && header.height >= 1 && header.width <= 0x7fffffff && header.height <= 0x7fffffff)
+      << path << ": PNG header announces " << header.width << " x " << header.height << " pixels";
+  switch (colour_type) {
+    case 0: header.channels = 1; break;
+    case 2: header.channels = 3; break;
+    case 3: header.channels = 3; break;
+    case 4: header.channels = 2; break;
+    case 6: header.channels = 4; break;
+    default: SAMP_THROW() << path << ": PNG header has colour type " << colour_type << " (not 0, 2, 3, 4 or 6)";
   }
-  const cv::Mat raw = cv::imread(path, cv::IMREAD_UNCHANGED);
-  SAMP_CHECK(!raw.empty()) << path << ": not a readable image (disparity PNG expected)";
+  const int d = header.bit_depth;
+  SAMP_CHECK(d == 1 || d == 2 || d == 4 || d == 8 || d == 16)
+      << path << ": PNG header has bit depth " << d << " (not 1, 2, 4, 8 or 16)";
+  return header;
+}
+
+cv::Mat ReadImage(const std::string& path, int flags, const char* what, int64_t max_bytes) {
+  const PngHeader header = ReadPngHeader(path);
+  SAMP_CHECK(header.DecodedBytes() <= max_bytes)
+      << path << ": the " << what << "'s header announces " << header.width << " x " << header.height
+      << " pixels of " << header.channels << " channel(s), " << header.DecodedBytes()
+      << " bytes decoded, more than the memory budget of " << max_bytes << " bytes (max_image_bytes)";
+  cv::Mat image;
+  try {
+    image = cv::imread(path, flags);
+  } catch (const cv::Exception& e) {
+    SAMP_THROW() << path << ": cannot decode the " << what << ": " << e.what();
+  }
+  SAMP_CHECK(!image.empty()) << path << ": not a readable " << what << " (a PNG file OpenCV cannot decode)";
+  return image;
+}
+
+cv::Mat ReadDisparity(const std::string& path, const cv::Size& expected_size, int64_t max_bytes) {
+  const cv::Mat raw = ReadImage(path, cv::IMREAD_UNCHANGED, "disparity map", max_bytes);
   SAMP_CHECK(raw.type() == CV_16UC1)
       << path << ": disparity PNG must be 1-channel 16-bit, got " << raw.channels() << " channel(s) of "
       << (raw.depth() == CV_8U ? "8-bit" : raw.depth() == CV_16U ? "16-bit" : "other") << " data";
@@ -447,14 +549,11 @@ void WriteDisparity(const std::string& path, const cv::Mat& disparity_px) {
       out[c] = static_cast<uint16_t>(std::max(1.0, value));  // a tiny positive value stays valid
     }
   }
-  WriteFileAtomically(path, [&](const std::string& temporary) {
-    // The temporary name may lack the extension OpenCV uses to pick the codec.
-    std::vector<uchar> buffer;
-    SAMP_CHECK(cv::imencode(".png", raw, buffer)) << "WriteDisparity " << path << ": PNG encoding failed";
-    std::ofstream stream(temporary, std::ios::binary);
-    stream.write(reinterpret_cast<const char*>(buffer.data()), static_cast<std::streamsize>(buffer.size()));
-    SAMP_CHECK(stream.good()) << "WriteDisparity: cannot write " << temporary;
-  });
+  // Encoded in memory (the codec from ".png", not from the temporary's name),
+  // written with every byte checked.
+  std::vector<uchar> buffer;
+  SAMP_CHECK(cv::imencode(".png", raw, buffer)) << "WriteDisparity " << path << ": PNG encoding failed";
+  WriteBytesAtomically(path, std::string(reinterpret_cast<const char*>(buffer.data()), buffer.size()));
 }
 
 }  // namespace samp

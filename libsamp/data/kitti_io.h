@@ -60,11 +60,14 @@ std::string FormatTrackingLabel(const ObjectLabel& label);
 // Returns (a, b, c, d) with the normal (a, b, c) scaled to unit length; the
 // plane is n . x + d = 0 in the camera of that frame, n pointing up (towards
 // -y), so n . x + d is the height of x above the road. A plane whose normal
-// points down is flipped and reported at debug level; a normal of zero length
-// or far from vertical (|b| < 0.5) is an error, and so is a normal whose
-// length overflows (|(a, b, c)| not finite) and a road farther than
-// kMaxPlaneOffset from the camera (|d| after scaling).
-constexpr double kMaxPlaneOffset = 1e4;  // m
+// points down is flipped and reported at debug level; a normal of zero length,
+// tilted more than kMaxPlaneTiltDeg from the camera's vertical (a 53 deg
+// road was once accepted) is an error, and so is a normal whose length
+// overflows (|(a, b, c)| not finite) and a camera more than kMaxPlaneOffset
+// above or below the road (|d| after scaling; a road 5 km below the camera
+// once made a label at y = 5,050 m).
+constexpr double kMaxPlaneOffset = 10.0;   // m
+constexpr double kMaxPlaneTiltDeg = 30.0;  // deg
 Eigen::Vector4d ReadPlane(const std::string& path);
 void WritePlane(const std::string& path, const Eigen::Vector4d& plane);
 
@@ -80,7 +83,33 @@ void WritePoses(const std::string& path, const std::vector<Eigen::Isometry3d>& w
 // Returns a CV_32FC1 image in pixels with 0 where invalid. Throws when the file
 // does not decode, is not 1-channel 16-bit, or (when expected_size is non-empty)
 // has another size.
-cv::Mat ReadDisparity(const std::string& path, const cv::Size& expected_size = cv::Size());
+// The memory budget of one decoded image (bytes): ReadImage refuses a PNG
+// whose header announces more (width x height x channels x bytes per sample)
+// before anything is decoded (a 1.7 MB PNG announcing 30000 x 30000 pixels
+// once took 1.8 GB). SequenceOptions::max_image_bytes sets it for sequences.
+constexpr int64_t kDefaultMaxImageBytes = int64_t(256) << 20;
+
+// What a PNG file's IHDR chunk announces.
+struct PngHeader {
+  int64_t width = 0, height = 0;
+  int channels = 0;       // after palette expansion: 1, 2, 3 or 4
+  int bit_depth = 0;      // 1, 2, 4, 8 or 16
+  int64_t DecodedBytes() const { return width * height * channels * (bit_depth > 8 ? 2 : 1); }
+};
+
+// Reads and checks the header of the PNG file `path` (signature, IHDR chunk
+// length, type, dimensions 1..2^31-1, bit depth and colour type of the PNG
+// specification) without decoding it; errors name the file.
+PngHeader ReadPngHeader(const std::string& path);
+
+// cv::imread(path, flags) of a PNG after ReadPngHeader and the memory budget
+// `max_bytes`; OpenCV's exceptions and an image it cannot decode become
+// samp::Error naming the file (`what`: "disparity map", "left image", ...).
+cv::Mat ReadImage(const std::string& path, int flags, const char* what,
+                  int64_t max_bytes = kDefaultMaxImageBytes);
+
+cv::Mat ReadDisparity(const std::string& path, const cv::Size& expected_size = cv::Size(),
+                      int64_t max_bytes = kDefaultMaxImageBytes);
 // Writes a CV_32FC1 disparity (px; <= 0 or non-finite = invalid) as such a PNG;
 // values are rounded to 1/256 px and must be < 256 px.
 void WriteDisparity(const std::string& path, const cv::Mat& disparity_px);

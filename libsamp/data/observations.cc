@@ -46,6 +46,38 @@ double SignedDistanceToBox(const ObjectLabel& detection, const Eigen::Vector3d& 
   return outside + inside;
 }
 
+bool InDetectionGate(const DetectionGate& gate, const Eigen::Vector3d& point) {
+  const double radius_sq = gate.radius * gate.radius;
+  if ((point - gate.box_centre).squaredNorm() <= radius_sq) return true;
+  if (gate.ray_sigmas <= 0.0) return false;
+  const Eigen::Vector3d ray = point - gate.camera_centre;
+  const Eigen::Vector3d centre = gate.box_centre - gate.camera_centre;
+  const double length = ray.norm();
+  const Eigen::Vector3d u = ray / length;
+  const double along = centre.dot(u);
+  const double lateral_sq = std::max(0.0, centre.squaredNorm() - along * along);
+  if (lateral_sq > radius_sq) return false;
+  // The noise at the box centre's depth (not the point's: far background has
+  // sigma of tens of metres and would pass any gate).
+  const double sigma_ray = gate.depth_sigma_at_centre / std::max(u.dot(gate.optical_axis), 1e-3);
+  return std::abs(length - along) <= gate.radius + gate.ray_sigmas * sigma_ray;
+}
+
+namespace {
+
+// Whether the point (camera frame) lies nearer to one of the rivals' boxes
+// than to the detection's (SignedDistanceToBox).
+bool ClaimedByRival(const ObjectLabel& detection, const std::vector<ObjectLabel>& rivals,
+                    const Eigen::Vector3d& point_in_camera) {
+  if (rivals.empty()) return false;
+  const double own = SignedDistanceToBox(detection, point_in_camera);
+  for (const ObjectLabel& rival : rivals)
+    if (SignedDistanceToBox(rival, point_in_camera) < own) return true;
+  return false;
+}
+
+}  // namespace
+
 int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& calibration,
                         const ObservationOptions& options, int track_id, TrackFrame* frame,
                         const std::vector<ObjectLabel>& rivals) {
@@ -63,48 +95,32 @@ int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& ca
 
   frame->candidate_points_in_world.clear();
   frame->candidate_sigmas.clear();
-  frame->candidate_depths.clear();
+  frame->candidate_pixels.clear();
+  frame->candidate_disparities_px.clear();
   if (u1 < u0 || v1 < v0) return 0;
 
   const Eigen::Vector3d center_in_camera = DetectionCenter(detection);
   const Eigen::Vector4d& plane = frame->ground_plane_in_world;
-  const double max_distance_sq = options.max_distance_to_detection * options.max_distance_to_detection;
+  DetectionGate gate;  // in the camera frame
+  gate.box_centre = center_in_camera;
+  gate.radius = options.max_distance_to_detection;
+  gate.ray_sigmas = options.depth_gate_sigmas;
+  gate.depth_sigma_at_centre = DepthSigma(center_in_camera.z(), options.sigma_disparity_px, calibration);
   const cv::Rect roi(u0, v0, u1 - u0 + 1, v1 - v0 + 1);
   const std::vector<StereoPoint> stereo =
       DisparityToPoints(disparity_px, calibration, options.min_disparity_px, 1, roi);
 
   std::vector<Eigen::Vector3d> points_in_world;
   std::vector<float> depths;
+  std::vector<const StereoPoint*> kept;
   for (const StereoPoint& p : stereo) {
-    if ((p.point_in_camera - center_in_camera).squaredNorm() > max_distance_sq) {
-      if (options.depth_gate_sigmas <= 0.0) continue;
-      const double length = p.point_in_camera.norm();
-      const Eigen::Vector3d u = p.point_in_camera / length;
-      const double along = center_in_camera.dot(u);
-      const double lateral_sq = std::max(0.0, center_in_camera.squaredNorm() - along * along);
-      if (lateral_sq > max_distance_sq) continue;
-      // The noise at the detection's depth (not the point's: far background
-      // has sigma of tens of metres and would pass any gate).
-      const double sigma_ray =
-          DepthSigma(center_in_camera.z(), options.sigma_disparity_px, calibration) / std::max(u.z(), 1e-3);
-      if (std::abs(length - along) > options.max_distance_to_detection + options.depth_gate_sigmas * sigma_ray) {
-        continue;
-      }
-    }
+    if (!InDetectionGate(gate, p.point_in_camera)) continue;
     const Eigen::Vector3d point_in_world = frame->world_from_camera * p.point_in_camera;
     if (plane.head<3>().dot(point_in_world) + plane[3] <= options.min_height_above_road) continue;
-    if (options.nearest_box_claims && !rivals.empty()) {
-      const double own = SignedDistanceToBox(detection, p.point_in_camera);
-      bool claimed = false;
-      for (const ObjectLabel& rival : rivals)
-        if (SignedDistanceToBox(rival, p.point_in_camera) < own) {
-          claimed = true;
-          break;
-        }
-      if (claimed) continue;
-    }
+    if (options.nearest_box_claims && ClaimedByRival(detection, rivals, p.point_in_camera)) continue;
     points_in_world.push_back(point_in_world);
     depths.push_back(static_cast<float>(p.point_in_camera.z()));
+    kept.push_back(&p);
   }
   const int total = static_cast<int>(points_in_world.size());
 
@@ -123,10 +139,12 @@ int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& ca
   frame->candidate_pixels_per_point = keep.empty() ? 1.0 : double(total) / double(keep.size());
   frame->candidate_points_in_world.reserve(keep.size());
   frame->candidate_sigmas.reserve(keep.size());
-  frame->candidate_depths.reserve(keep.size());
+  frame->candidate_pixels.reserve(keep.size());
+  frame->candidate_disparities_px.reserve(keep.size());
   for (int i : keep) {
     frame->candidate_points_in_world.push_back(points_in_world[i]);
-    frame->candidate_depths.push_back(depths[i]);
+    frame->candidate_pixels.emplace_back(kept[i]->u, kept[i]->v);
+    frame->candidate_disparities_px.push_back(kept[i]->disparity_px);
     frame->candidate_sigmas.push_back(DepthSigma(depths[i], options.sigma_disparity_px, calibration));
   }
   return total;

@@ -49,7 +49,8 @@ struct ObservationOptions {
   void Check() const;  // throws samp::Error naming the field
 };
 
-// Fills frame->candidate_points_in_world, candidate_sigmas and candidate_depths
+// Fills frame->candidate_points_in_world, candidate_sigmas, candidate_pixels
+// and candidate_disparities_px
 // from the pixels of `disparity_px` (CV_32FC1, 0 = invalid) inside the
 // enlarged 2D box of frame->detection, keeping points above the road
 // (frame->ground_plane_in_world) and near the detection, mapped to world by
@@ -68,6 +69,25 @@ int ExtractObservations(const cv::Mat& disparity_px, const StereoCalibration& ca
 // rotation_y about the camera's y axis, length along the car): negative
 // inside (minus the distance to the nearest face), m.
 double SignedDistanceToBox(const ObjectLabel& detection, const Eigen::Vector3d& point_in_camera);
+
+// The detection gate of a stereo point, shared by the candidates
+// (ExtractObservations) and the fitter's first association: the point lies
+// within `radius` of the detected box's centre (a sphere), or, with
+// ray_sigmas > 0, its viewing ray from the camera passes within `radius` of
+// the centre and its distance along the ray lies within radius + ray_sigmas
+// sigma_ray of the centre's, sigma_ray = depth_sigma_at_centre / cos(ray,
+// optical axis). Far away the stereo noise along the ray (metres) exceeds the
+// sphere, which would cut it unevenly about a detection that is itself off
+// along the ray. Any frame (camera, world), as long as all four agree.
+struct DetectionGate {
+  Eigen::Vector3d camera_centre = Eigen::Vector3d::Zero();
+  Eigen::Vector3d optical_axis = Eigen::Vector3d::UnitZ();  // unit
+  Eigen::Vector3d box_centre = Eigen::Vector3d::Zero();     // DetectionCenter
+  double radius = 3.0;                 // m
+  double ray_sigmas = 0.0;             // 0 = the sphere alone
+  double depth_sigma_at_centre = 0.0;  // sigma_d at the box centre's depth, m
+};
+bool InDetectionGate(const DetectionGate& gate, const Eigen::Vector3d& point);
 
 // Plane transforms: a plane (n, d) in frame A (n . x_A + d = 0) to frame B
 // given b_from_a. Keeps n unit and pointing the same way.

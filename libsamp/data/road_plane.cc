@@ -54,6 +54,80 @@ std::string RoadPlaneSummary::BriefReport() const {
   return s.str();
 }
 
+namespace {
+
+// The stereo points that may lie on the road (below the camera, in front of
+// it, nearer than max_depth), at most max_points of them (a seeded subsample).
+std::vector<Eigen::Vector3d> RoadCandidates(const std::vector<StereoPoint>& stereo_points,
+                                            const RoadPlaneOptions& options, std::mt19937_64* rng) {
+  std::vector<Eigen::Vector3d> points;
+  for (const StereoPoint& p : stereo_points) {
+    const Eigen::Vector3d& x = p.point_in_camera;
+    if (x.allFinite() && x.y() > options.min_point_height_below_camera && x.z() > 0 &&
+        x.z() < options.max_depth)
+      points.push_back(x);
+  }
+  if (static_cast<int>(points.size()) > options.max_points) {
+    // Partial Fisher-Yates with a portable index draw.
+    for (int i = 0; i < options.max_points; ++i) {
+      const size_t j = i + (*rng)() % (points.size() - i);
+      std::swap(points[i], points[j]);
+    }
+    points.resize(options.max_points);
+  }
+  return points;
+}
+
+// A road plane the camera could stand on: tilted at most max_tilt_deg, the
+// camera between min_ and max_camera_height above it.
+bool Plausible(const Eigen::Vector4d& plane, const RoadPlaneOptions& options) {
+  const double cos_max_tilt = std::cos(options.max_tilt_deg * kPi / 180.0);
+  return -plane.y() >= cos_max_tilt && plane[3] >= options.min_camera_height &&
+         plane[3] <= options.max_camera_height;
+}
+
+// The points within inlier_threshold of the plane (their indices appended to
+// *inliers when given); returns their number.
+int CountInliers(const std::vector<Eigen::Vector3d>& points, const Eigen::Vector4d& plane,
+                 const RoadPlaneOptions& options, std::vector<int>* inliers) {
+  int count = 0;
+  for (int i = 0; i < static_cast<int>(points.size()); ++i) {
+    if (std::abs(plane.head<3>().dot(points[i]) + plane[3]) < options.inlier_threshold) {
+      ++count;
+      if (inliers != nullptr) inliers->push_back(i);
+    }
+  }
+  return count;
+}
+
+// RANSAC over plausible planes through three points; *best_count the best
+// plane's inliers (-1 when no sample was plausible).
+Eigen::Vector4d RansacPlane(const std::vector<Eigen::Vector3d>& points, const RoadPlaneOptions& options,
+                            const Eigen::Vector4d& fallback, std::mt19937_64* rng, int* best_count) {
+  const int n = static_cast<int>(points.size());
+  Eigen::Vector4d best = fallback;
+  *best_count = -1;
+  for (int it = 0; it < options.iterations; ++it) {
+    const int a = static_cast<int>((*rng)() % n), b = static_cast<int>((*rng)() % n),
+              c = static_cast<int>((*rng)() % n);
+    Eigen::Vector3d normal = (points[b] - points[a]).cross(points[c] - points[a]);
+    const double norm = normal.norm();
+    if (norm < 1e-9) continue;  // degenerate sample
+    normal /= norm;
+    if (normal.y() > 0) normal = -normal;
+    const Eigen::Vector4d plane(normal.x(), normal.y(), normal.z(), -normal.dot(points[a]));
+    if (!Plausible(plane, options)) continue;
+    const int count = CountInliers(points, plane, options, nullptr);
+    if (count > *best_count) {
+      *best_count = count;
+      best = plane;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
 Eigen::Vector4d EstimateRoadPlane(const std::vector<StereoPoint>& stereo_points,
                                   const RoadPlaneOptions& options, RoadPlaneSummary* summary) {
   options.Check();
@@ -62,22 +136,8 @@ Eigen::Vector4d EstimateRoadPlane(const std::vector<StereoPoint>& stereo_points,
   result = RoadPlaneSummary();
   const Eigen::Vector4d kDefault(0, -1, 0, 1.65);
 
-  std::vector<Eigen::Vector3d> points;
-  for (const StereoPoint& p : stereo_points) {
-    const Eigen::Vector3d& x = p.point_in_camera;
-    if (x.allFinite() && x.y() > options.min_point_height_below_camera && x.z() > 0 &&
-        x.z() < options.max_depth)
-      points.push_back(x);
-  }
   std::mt19937_64 rng(options.seed);
-  if (static_cast<int>(points.size()) > options.max_points) {
-    // Partial Fisher-Yates with a portable index draw.
-    for (int i = 0; i < options.max_points; ++i) {
-      const size_t j = i + rng() % (points.size() - i);
-      std::swap(points[i], points[j]);
-    }
-    points.resize(options.max_points);
-  }
+  const std::vector<Eigen::Vector3d> points = RoadCandidates(stereo_points, options, &rng);
   const int n = static_cast<int>(points.size());
   result.num_points = n;
   if (n < options.min_inliers || n < 3) {
@@ -86,41 +146,8 @@ Eigen::Vector4d EstimateRoadPlane(const std::vector<StereoPoint>& stereo_points,
     result.message = s.str();
     return kDefault;
   }
-
-  const double cos_max_tilt = std::cos(options.max_tilt_deg * kPi / 180.0);
-  auto plausible = [&](const Eigen::Vector4d& plane) {
-    return -plane.y() >= cos_max_tilt && plane[3] >= options.min_camera_height &&
-           plane[3] <= options.max_camera_height;
-  };
-  auto count_inliers = [&](const Eigen::Vector4d& plane, std::vector<int>* inliers) {
-    int count = 0;
-    for (int i = 0; i < n; ++i) {
-      if (std::abs(plane.head<3>().dot(points[i]) + plane[3]) < options.inlier_threshold) {
-        ++count;
-        if (inliers != nullptr) inliers->push_back(i);
-      }
-    }
-    return count;
-  };
-
-  Eigen::Vector4d best = kDefault;
   int best_count = -1;
-  for (int it = 0; it < options.iterations; ++it) {
-    const int a = static_cast<int>(rng() % n), b = static_cast<int>(rng() % n),
-              c = static_cast<int>(rng() % n);
-    Eigen::Vector3d normal = (points[b] - points[a]).cross(points[c] - points[a]);
-    const double norm = normal.norm();
-    if (norm < 1e-9) continue;  // degenerate sample
-    normal /= norm;
-    if (normal.y() > 0) normal = -normal;
-    const Eigen::Vector4d plane(normal.x(), normal.y(), normal.z(), -normal.dot(points[a]));
-    if (!plausible(plane)) continue;
-    const int count = count_inliers(plane, nullptr);
-    if (count > best_count) {
-      best_count = count;
-      best = plane;
-    }
-  }
+  const Eigen::Vector4d best = RansacPlane(points, options, kDefault, &rng, &best_count);
   if (best_count < options.min_inliers) {
     std::ostringstream s;
     s << "best of " << options.iterations << " plausible hypotheses has "
@@ -133,14 +160,14 @@ Eigen::Vector4d EstimateRoadPlane(const std::vector<StereoPoint>& stereo_points,
   std::vector<int> inliers;
   for (int round = 0; round < 2; ++round) {
     inliers.clear();
-    count_inliers(plane, &inliers);
+    CountInliers(points, plane, options, &inliers);
     if (static_cast<int>(inliers.size()) < options.min_inliers) break;
     const Eigen::Vector4d refined = FitPlaneLeastSquares(points, inliers);
-    if (!plausible(refined)) break;
+    if (!Plausible(refined, options)) break;
     plane = refined;
   }
   inliers.clear();
-  count_inliers(plane, &inliers);
+  CountInliers(points, plane, options, &inliers);
   if (static_cast<int>(inliers.size()) < options.min_inliers) {
     result.message = "the refined plane lost its inliers";
     return kDefault;

@@ -56,6 +56,7 @@ void SequenceOptions::Check() const {
   SAMP_CHECK(!object_types.empty()) << "SequenceOptions.object_types must not be empty";
   SAMP_CHECK(last_frame < 0 || first_frame < 0 || first_frame <= last_frame)
       << "SequenceOptions.first_frame = " << first_frame << " is after last_frame = " << last_frame;
+  SAMP_CHECK(max_image_bytes > 0) << "SequenceOptions.max_image_bytes must be > 0, is " << max_image_bytes;
 }
 
 SequenceFiles ListSequence(const std::string& directory) {
@@ -126,10 +127,11 @@ SequenceReader::SequenceReader(const std::string& directory, const SequenceOptio
   for (const FrameFiles& f : files_.frames) {
     const std::string& probe = !f.image_left.empty() ? f.image_left : f.disparity;
     if (probe.empty()) continue;
-    const cv::Mat image = cv::imread(probe, cv::IMREAD_UNCHANGED);
-    SAMP_CHECK(!image.empty()) << probe << ": not a readable PNG image";
-    width = image.cols;
-    height = image.rows;
+    const PngHeader image = ReadPngHeader(probe);  // the size, without decoding
+    SAMP_CHECK(image.width <= 1000000 && image.height <= 1000000)
+        << probe << ": PNG header announces " << image.width << " x " << image.height << " pixels";
+    width = int(image.width);
+    height = int(image.height);
     size_known = true;
     break;
   }
@@ -165,8 +167,14 @@ std::vector<ObjectLabel> SequenceReader::ReadDetections(int index) const {
       << "sequence " << files_.directory << ": missing detections/" << SequenceLayout::FrameTag(files_.name, f.frame)
       << ".txt (an empty file means no detections)";
   std::vector<ObjectLabel> kept;
+  int number = 0;
   for (ObjectLabel& label : ReadLabels(f.detections)) {
+    ++number;
     if (!TypeKept(label.type, options_) || label.score < options_.min_detection_score) continue;
+    // The tracker needs a box with a volume; say which file holds one without.
+    SAMP_CHECK(label.height > 0 && label.width > 0 && label.length > 0)
+        << f.detections << ": detection " << number << " (" << label.type << ") has a zero size h w l = "
+        << label.height << " " << label.width << " " << label.length << " m";
     label.frame = f.frame;
     kept.push_back(label);
   }
@@ -184,15 +192,13 @@ SequenceFrame SequenceReader::ReadFrame(int index, bool with_detections) const {
   if (with_detections) frame.detections = ReadDetections(index);
 
   if (!f.disparity.empty()) {
-    frame.disparity_px = ReadDisparity(f.disparity, size);
+    frame.disparity_px = ReadDisparity(f.disparity, size, options_.max_image_bytes);
   } else {
     SAMP_CHECK(!f.image_left.empty() && !f.image_right.empty())
         << "sequence " << files_.directory << ": frame " << tag << " has no disparity/" << tag
         << ".png and no image_2/image_3 pair to compute it from";
-    const cv::Mat left = cv::imread(f.image_left, cv::IMREAD_GRAYSCALE);
-    const cv::Mat right = cv::imread(f.image_right, cv::IMREAD_GRAYSCALE);
-    SAMP_CHECK(!left.empty()) << f.image_left << ": not a readable image";
-    SAMP_CHECK(!right.empty()) << f.image_right << ": not a readable image";
+    const cv::Mat left = ReadImage(f.image_left, cv::IMREAD_GRAYSCALE, "left image", options_.max_image_bytes);
+    const cv::Mat right = ReadImage(f.image_right, cv::IMREAD_GRAYSCALE, "right image", options_.max_image_bytes);
     SAMP_CHECK(left.size() == size && right.size() == size)
         << "frame " << tag << ": image_2 is " << left.cols << "x" << left.rows << ", image_3 is "
         << right.cols << "x" << right.rows << ", expected " << size.width << "x" << size.height;
@@ -247,6 +253,95 @@ std::string SequenceSummary::BriefReport() const {
   return s.str();
 }
 
+namespace {
+
+// The detections linked into tracks: by the tracker (options.tracker, its
+// min_track_length capped at the number of frames) or read from
+// options.tracking_labels_path. `indices` are the reader's frame indices in
+// the range, index_of_frame their inverse.
+std::vector<LinkedTrack> LinkSequenceTracks(const std::string& directory, const SequenceReader& reader,
+                                            const SequenceOptions& options, const std::vector<int>& indices,
+                                            const std::map<int, int>& index_of_frame, SequenceSummary* result) {
+  const SequenceFiles& files = reader.files();
+  // A track cannot be longer than the sequence: in a sequence of fewer frames
+  // than min_track_length (e.g. one KITTI stereo frame) tracks of every frame
+  // are kept.
+  TrackerOptions tracker = options.tracker;
+  if (tracker.min_track_length > result->num_frames) {
+    tracker.min_track_length = result->num_frames;
+    result->messages.push_back(files.name + ": " + std::to_string(result->num_frames) +
+                               " frame(s), fewer than min_track_length " +
+                               std::to_string(options.tracker.min_track_length) +
+                               ": tracks of " + std::to_string(result->num_frames) + " frame(s) kept");
+  }
+  if (options.tracking_labels_path.empty()) {
+    std::vector<FrameDetections> detections;
+    for (int i : indices) {
+      FrameDetections fd;
+      fd.frame = files.frames[i].frame;
+      fd.world_from_camera = reader.WorldFromCamera(fd.frame);
+      fd.detections = reader.ReadDetections(i);
+      detections.push_back(std::move(fd));
+    }
+    return LinkDetections(detections, tracker, &result->tracking);
+  }
+  std::vector<ObjectLabel> labels;
+  for (const ObjectLabel& label : ReadTrackingLabels(options.tracking_labels_path)) {
+    if (!TypeKept(label.type, options) || label.score < options.min_detection_score) continue;
+    if (!FrameInRange(label.frame, options)) continue;
+    SAMP_CHECK(index_of_frame.count(label.frame) > 0)
+        << options.tracking_labels_path << ": track " << label.track_id << " has a label in frame "
+        << label.frame << ", which sequence " << directory << " does not have";
+    labels.push_back(label);
+  }
+  result->tracks_from_labels = true;
+  return TracksFromLabels(labels, tracker.min_track_length, &result->tracking);
+}
+
+// The track frames of every linked track with their candidate points
+// (ExtractObservations): frames are read in parallel, each task filling only
+// its own TrackFrame slots; a point nearer to another detection of its frame
+// is that one's (ObservationOptions::nearest_box_claims). Returns the frames
+// read (disparity released) for the summary.
+std::vector<SequenceFrame> FillTrackFrames(const SequenceReader& reader, const SequenceOptions& options,
+                                           const std::vector<LinkedTrack>& linked,
+                                           const std::map<int, int>& index_of_frame, std::vector<Track>* tracks) {
+  // Which (track, detection) pairs each frame serves.
+  std::map<int, std::vector<std::pair<int, int>>> members_of_frame;  // frame -> (track, k)
+  for (int t = 0; t < static_cast<int>(linked.size()); ++t)
+    for (int k = 0; k < static_cast<int>(linked[t].detections.size()); ++k)
+      members_of_frame[linked[t].detections[k].frame].push_back({t, k});
+  std::vector<int> work_frames;
+  for (const auto& [frame, members] : members_of_frame) work_frames.push_back(frame);
+
+  std::vector<SequenceFrame> read(work_frames.size());
+  tbb::parallel_for(size_t(0), work_frames.size(), [&](size_t w) {
+    const int frame_number = work_frames[w];
+    SequenceFrame frame = reader.ReadFrame(index_of_frame.at(frame_number), /*with_detections=*/false);
+    const Eigen::Vector4d plane_in_world = TransformPlane(frame.plane_in_camera, frame.world_from_camera);
+    const std::vector<std::pair<int, int>>& members = members_of_frame.at(frame_number);
+    for (const auto& [t, k] : members) {
+      std::vector<ObjectLabel> rivals;  // the frame's other detections
+      for (const auto& [t2, k2] : members)
+        if (t2 != t) rivals.push_back(linked[t2].detections[k2]);
+      TrackFrame& tf = (*tracks)[t].frames[k];
+      tf.frame = frame_number;
+      tf.time = frame_number / options.tracker.frame_rate_hz;
+      tf.detection = linked[t].detections[k];
+      tf.detection_covariance = DetectionCovariance(tf.detection.position, options.tracker);
+      tf.world_from_camera = frame.world_from_camera;
+      tf.ground_plane_in_world = plane_in_world;
+      ExtractObservations(frame.disparity_px, reader.calibration(), options.observations, linked[t].id, &tf,
+                          rivals);
+    }
+    frame.disparity_px.release();
+    read[w] = std::move(frame);
+  });
+  return read;
+}
+
+}  // namespace
+
 std::vector<Track> LoadSequenceTracks(const std::string& directory, const SequenceOptions& options,
                                       SequenceSummary* summary) {
   options.Check();
@@ -269,56 +364,27 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
   SAMP_CHECK(!indices.empty()) << "sequence " << directory << ": no frames in the range ["
                                << options.first_frame << ", " << options.last_frame << "]";
   result.num_frames = static_cast<int>(indices.size());
+  // Gaps in the frame numbering (frames without any file): said once per gap,
+  // in the messages (tracks.json) and as a warning.
+  for (size_t k = 1; k < indices.size(); ++k) {
+    const int before = files.frames[indices[k - 1]].frame, after = files.frames[indices[k]].frame;
+    if (after == before + 1) continue;
+    const std::string gap = files.name + ": frame(s) " + std::to_string(before + 1) +
+                            (after - 1 > before + 1 ? " to " + std::to_string(after - 1) : std::string()) +
+                            " missing (no image, disparity or detection file) between frames " +
+                            std::to_string(before) + " and " + std::to_string(after);
+    LogWarning() << gap;
+    result.messages.push_back(gap);
+  }
 
-  // A track cannot be longer than the sequence: in a sequence of fewer frames
-  // than min_track_length (e.g. one KITTI stereo frame) tracks of every frame
-  // are kept.
-  TrackerOptions tracker = options.tracker;
-  if (tracker.min_track_length > result.num_frames) {
-    tracker.min_track_length = result.num_frames;
-    result.messages.push_back(files.name + ": " + std::to_string(result.num_frames) +
-                              " frame(s), fewer than min_track_length " +
-                              std::to_string(options.tracker.min_track_length) +
-                              ": tracks of " + std::to_string(result.num_frames) + " frame(s) kept");
-  }
-  std::vector<LinkedTrack> linked;
-  if (options.tracking_labels_path.empty()) {
-    std::vector<FrameDetections> detections;
-    for (int i : indices) {
-      FrameDetections fd;
-      fd.frame = files.frames[i].frame;
-      fd.world_from_camera = reader.WorldFromCamera(fd.frame);
-      fd.detections = reader.ReadDetections(i);
-      detections.push_back(std::move(fd));
-    }
-    linked = LinkDetections(detections, tracker, &result.tracking);
-  } else {
-    std::vector<ObjectLabel> labels;
-    for (const ObjectLabel& label : ReadTrackingLabels(options.tracking_labels_path)) {
-      if (!TypeKept(label.type, options) || label.score < options.min_detection_score) continue;
-      if (!FrameInRange(label.frame, options)) continue;
-      SAMP_CHECK(index_of_frame.count(label.frame) > 0)
-          << options.tracking_labels_path << ": track " << label.track_id << " has a label in frame "
-          << label.frame << ", which sequence " << directory << " does not have";
-      labels.push_back(label);
-    }
-    linked = TracksFromLabels(labels, tracker.min_track_length, &result.tracking);
-    result.tracks_from_labels = true;
-  }
+  const std::vector<LinkedTrack> linked =
+      LinkSequenceTracks(directory, reader, options, indices, index_of_frame, &result);
   if (result.tracking.num_short_tracks > 0)
     LogInfo() << files.name << ": " << result.tracking.BriefReport();
   for (const std::string& warning : result.tracking.warnings) {
     LogWarning() << files.name << ": " << warning;
     result.messages.push_back(files.name + ": " + warning);
   }
-
-  // Which (track, detection) pairs each frame serves.
-  std::map<int, std::vector<std::pair<int, int>>> members_of_frame;  // frame -> (track, k)
-  for (int t = 0; t < static_cast<int>(linked.size()); ++t)
-    for (int k = 0; k < static_cast<int>(linked[t].detections.size()); ++k)
-      members_of_frame[linked[t].detections[k].frame].push_back({t, k});
-  std::vector<int> work_frames;
-  for (const auto& [frame, members] : members_of_frame) work_frames.push_back(frame);
 
   std::vector<Track> tracks(linked.size());
   for (size_t t = 0; t < linked.size(); ++t) {
@@ -328,34 +394,7 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
     tracks[t].calibration = reader.calibration();
     tracks[t].frames.resize(linked[t].detections.size());
   }
-  std::vector<SequenceFrame> read(work_frames.size());
-  std::vector<int> totals(work_frames.size(), 0);
-  // Frames are independent: read and extract in parallel; each task writes
-  // only its own TrackFrame slots.
-  tbb::parallel_for(size_t(0), work_frames.size(), [&](size_t w) {
-    const int frame_number = work_frames[w];
-    SequenceFrame frame = reader.ReadFrame(index_of_frame.at(frame_number), /*with_detections=*/false);
-    const Eigen::Vector4d plane_in_world = TransformPlane(frame.plane_in_camera, frame.world_from_camera);
-    const std::vector<std::pair<int, int>>& members = members_of_frame.at(frame_number);
-    for (const auto& [t, k] : members) {
-      std::vector<ObjectLabel> rivals;  // the frame's other detections (ObservationOptions::nearest_box_claims)
-      for (const auto& [t2, k2] : members)
-        if (t2 != t) rivals.push_back(linked[t2].detections[k2]);
-      TrackFrame& tf = tracks[t].frames[k];
-      tf.frame = frame_number;
-      tf.time = frame_number / options.tracker.frame_rate_hz;
-      tf.detection = linked[t].detections[k];
-      tf.detection_covariance = DetectionCovariance(tf.detection.position, options.tracker);
-      tf.world_from_camera = frame.world_from_camera;
-      tf.ground_plane_in_world = plane_in_world;
-      totals[w] += ExtractObservations(frame.disparity_px, reader.calibration(), options.observations,
-                                       linked[t].id, &tf, rivals);
-    }
-    frame.disparity_px.release();
-    read[w] = std::move(frame);
-  });
-
-  for (const SequenceFrame& frame : read) {
+  for (const SequenceFrame& frame : FillTrackFrames(reader, options, linked, index_of_frame, &tracks)) {
     result.frames_with_estimated_plane += frame.plane_estimated ? 1 : 0;
     result.frames_with_computed_disparity += frame.disparity_computed ? 1 : 0;
     result.frames_plane_estimation_failed += frame.plane_estimation_failed ? 1 : 0;

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "libsamp/data/kitti_io.h"
 #include "libsamp/data/observations.h"
 #include "libsamp/data/road_plane.h"
 #include "libsamp/data/stereo.h"
@@ -37,6 +38,10 @@ struct SequenceOptions {
   // Only frames in [first_frame, last_frame] (-1 = unbounded).
   int first_frame = -1;
   int last_frame = -1;
+  // Memory budget of one decoded image or disparity map, bytes: a PNG whose
+  // header announces more is refused before decoding (data/kitti_io.h
+  // ReadImage). Not written to config.json.
+  int64_t max_image_bytes = kDefaultMaxImageBytes;
 
   void Check() const;  // throws samp::Error naming the field
 };

@@ -47,7 +47,10 @@ struct TrackFrame {
   // enlarged 2D box, above the road), with their depth-dependent std. dev. sigma_d.
   std::vector<Eigen::Vector3d> candidate_points_in_world;
   std::vector<double> candidate_sigmas;
-  std::vector<float> candidate_depths;  // depth in the camera of this frame, metres
+  // Where each candidate was seen: its pixel (u, v) in the left image and its
+  // disparity, px (empty when the points were not made from a disparity map).
+  std::vector<Eigen::Vector2f> candidate_pixels;
+  std::vector<float> candidate_disparities_px;
   // Image pixels each candidate stands for (>= 1: the candidates may be a
   // subsample of the valid pixels); the fitter's effective observation count.
   double candidate_pixels_per_point = 1.0;

@@ -69,6 +69,9 @@ OptionTable<TrackerOptions> MakeTrackerTable() {
   t.Add("warn_median_length", &T::warn_median_length,
         "the summary warns when a sequence's median track is shorter (frames)")
       .AtLeast(0);
+  t.AddOptional("robust_cues", &T::robust_cues,
+                "one cue (box size, height or yaw) far outside its gate costs its gate value instead of "
+                "forbidding the pair when position and motion agree");
   return t;
 }
 

@@ -2,12 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <unordered_map>
 
+#include "libsamp/core/json_text.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/pose.h"
@@ -196,6 +199,9 @@ struct OnlineTrack {
   bool confirmed = false;
   Eigen::Vector3d size_sum = Eigen::Vector3d::Zero();
   double height_sum = 0.0;
+  // Detections in size_sum and height_sum (all of them unless robust_cues
+  // left an outlying cue out).
+  int size_count = 0, height_count = 0;
   Eigen::Vector2d axis_vector = Eigen::Vector2d(1, 0);  // smoothed (cos 2a, sin 2a)
   int Count() const { return static_cast<int>(members.size()); }
   double Axis() const {
@@ -204,33 +210,63 @@ struct OnlineTrack {
   }
 };
 
+// Cues of an observation outside their gates (bits), for robust_cues.
+constexpr unsigned kSizeOutlier = 1, kHeightOutlier = 2, kAxisOutlier = 4;
+
+int CountBits(unsigned mask) { return int((mask & 1) != 0) + int((mask & 2) != 0) + int((mask & 4) != 0); }
+
 // The association cost of an observation to a track predicted to its time
-// (state and covariance given), or kNoAssignment outside a gate.
+// (state and covariance given), or kNoAssignment outside a gate. With
+// robust_cues a single cue outside its gate costs the gate's value and is
+// flagged in *outliers; two or more forbid the pair.
 double AssociationCost(const OnlineTrack& track, const Vector4d& predicted, const Matrix4d& predicted_covariance,
-                       const Observation& obs, const TrackerOptions& o) {
+                       const Observation& obs, const TrackerOptions& o, unsigned* outliers) {
+  *outliers = 0;
   const Eigen::Vector2d innovation = obs.ground - predicted.head<2>();
   const Eigen::Matrix2d s = predicted_covariance.topLeftCorner<2, 2>() + obs.ground_covariance;
   const double d2_position = innovation.dot(s.ldlt().solve(innovation));
   if (!(d2_position <= o.gate_chi2)) return kNoAssignment;
-  const double n = track.Count();
-  const Eigen::Vector3d size_difference = obs.size - track.size_sum / n;
-  const double d2_size = size_difference.squaredNorm() / (o.size_sigma * o.size_sigma * (1.0 + 1.0 / n));
-  if (!(d2_size <= o.size_gate_chi2)) return kNoAssignment;
-  const double height_difference = obs.height - track.height_sum / n;
-  const double d2_height = height_difference * height_difference / (obs.height_variance * (1.0 + 1.0 / n));
-  if (!(d2_height <= o.height_gate_chi2)) return kNoAssignment;
-  const double axis_difference = AxisDifference(obs.axis, track.Axis());
-  if (std::abs(axis_difference) > o.yaw_gate_deg * kPi / 180.0) return kNoAssignment;
+  const double n_size = track.size_count, n_height = track.height_count;
+  double d2_size = o.size_gate_chi2;  // no size yet (every earlier one outlying): the gate's value
+  if (n_size > 0) {
+    const Eigen::Vector3d size_difference = obs.size - track.size_sum / n_size;
+    d2_size = size_difference.squaredNorm() / (o.size_sigma * o.size_sigma * (1.0 + 1.0 / n_size));
+  }
+  if (!(d2_size <= o.size_gate_chi2)) {
+    if (!o.robust_cues) return kNoAssignment;
+    d2_size = o.size_gate_chi2;
+    *outliers |= kSizeOutlier;
+  }
+  double d2_height = o.height_gate_chi2;
+  if (n_height > 0) {
+    const double height_difference = obs.height - track.height_sum / n_height;
+    d2_height = height_difference * height_difference / (obs.height_variance * (1.0 + 1.0 / n_height));
+  }
+  if (!(d2_height <= o.height_gate_chi2)) {
+    if (!o.robust_cues) return kNoAssignment;
+    d2_height = o.height_gate_chi2;
+    *outliers |= kHeightOutlier;
+  }
+  double axis_difference = AxisDifference(obs.axis, track.Axis());
+  const double axis_gate = o.yaw_gate_deg * kPi / 180.0;
+  if (std::abs(axis_difference) > axis_gate) {
+    if (!o.robust_cues) return kNoAssignment;
+    axis_difference = axis_gate;
+    *outliers |= kAxisOutlier;
+  }
+  if (CountBits(*outliers) > 1) return kNoAssignment;
   const double s_yaw = o.yaw_sigma_deg * kPi / 180.0;
   const double d2_axis = axis_difference * axis_difference / (1.5 * s_yaw * s_yaw);
   return d2_position + d2_size + d2_height + d2_axis + (track.confirmed ? 0.0 : o.tentative_penalty);
 }
 
-void AddObservation(int index, const Observation& obs, OnlineTrack* track) {
+// Adds an observation to a track; cues flagged in `outliers` do not update its means.
+void AddObservation(int index, const Observation& obs, unsigned outliers, OnlineTrack* track) {
   track->members.push_back(index);
   track->last_frame = obs.frame;
-  track->size_sum += obs.size;
-  track->height_sum += obs.height;
+  if (!(outliers & kSizeOutlier)) track->size_sum += obs.size, ++track->size_count;
+  if (!(outliers & kHeightOutlier)) track->height_sum += obs.height, ++track->height_count;
+  if (outliers & kAxisOutlier) return;
   const Eigen::Vector2d v(std::cos(2 * obs.axis), std::sin(2 * obs.axis));
   if (track->Count() == 1) {
     track->axis_vector = v;
@@ -238,6 +274,108 @@ void AddObservation(int index, const Observation& obs, OnlineTrack* track) {
     const Eigen::Vector2d mixed = 0.5 * track->axis_vector + 0.5 * v;
     if (mixed.norm() > 1e-9) track->axis_vector = mixed.normalized();
   }
+}
+
+// Largest eigenvalue of a symmetric 2x2 matrix.
+double LargestEigenvalue(const Eigen::Matrix2d& m) {
+  const double mean = 0.5 * (m(0, 0) + m(1, 1));
+  const double half = 0.5 * (m(0, 0) - m(1, 1));
+  return mean + std::sqrt(half * half + m(0, 1) * m(1, 0));
+}
+
+// The observations of one frame in a grid of square cells (ground plane), so
+// that a track meets only the observations within its gate's radius.
+class GroundHash {
+ public:
+  GroundHash(const std::vector<Observation>& observations, const std::vector<int>& members, double cell)
+      : cell_(cell) {
+    for (int k = 0; k < int(members.size()); ++k) cells_[Key(Cell(observations[members[k]].ground))].push_back(k);
+  }
+  // Indices (into `members`) of the observations within `radius` of `center`
+  // (a superset), increasing.
+  std::vector<int> Near(const Eigen::Vector2d& center, double radius, int num_members) const {
+    std::vector<int> out;
+    const Eigen::Vector2i lo = Cell(center - Eigen::Vector2d::Constant(radius));
+    const Eigen::Vector2i hi = Cell(center + Eigen::Vector2d::Constant(radius));
+    const double span = (double(hi.x()) - lo.x() + 1) * (double(hi.y()) - lo.y() + 1);
+    if (!(span <= 4.0 * num_members)) {  // a wide gate: every observation
+      out.resize(num_members);
+      for (int k = 0; k < num_members; ++k) out[k] = k;
+      return out;
+    }
+    for (int x = lo.x(); x <= hi.x(); ++x)
+      for (int y = lo.y(); y <= hi.y(); ++y) {
+        const auto it = cells_.find(Key(Eigen::Vector2i(x, y)));
+        if (it != cells_.end()) out.insert(out.end(), it->second.begin(), it->second.end());
+      }
+    std::sort(out.begin(), out.end());
+    return out;
+  }
+
+ private:
+  Eigen::Vector2i Cell(const Eigen::Vector2d& p) const {
+    const double limit = 1e9;  // far-off (or non-finite) positions share the border cells
+    auto index = [&](double v) {
+      const double c = std::floor(v / cell_);
+      return int(std::isfinite(c) ? std::clamp(c, -limit, limit) : limit);
+    };
+    return Eigen::Vector2i(index(p.x()), index(p.y()));
+  }
+  static int64_t Key(const Eigen::Vector2i& c) { return (int64_t(c.x()) << 32) ^ (int64_t(c.y()) & 0xffffffff); }
+  double cell_;
+  std::unordered_map<int64_t, std::vector<int>> cells_;
+};
+
+// The least-cost assignment of a sparse cost list (row, col, cost; allowed
+// pairs only), solved per connected group of rows and columns: the same
+// optimum as SolveAssignment over the dense matrix, in time linear in the
+// number of groups of bounded size. Returns the column of each row or -1.
+struct SparseCost {
+  int row, col;
+  double cost;
+};
+
+std::vector<int> SolveSparseAssignment(const std::vector<SparseCost>& pairs, int rows, int cols) {
+  std::vector<int> parent(rows + cols);
+  for (int i = 0; i < rows + cols; ++i) parent[i] = i;
+  std::function<int(int)> find = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (const SparseCost& p : pairs) {
+    const int a = find(p.row), b = find(rows + p.col);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+  std::map<int, std::pair<std::vector<int>, std::vector<int>>> groups;  // root -> rows, cols (increasing)
+  for (const SparseCost& p : pairs) groups[find(p.row)];
+  for (int r = 0; r < rows; ++r) {
+    auto it = groups.find(find(r));
+    if (it != groups.end()) it->second.first.push_back(r);
+  }
+  for (int c = 0; c < cols; ++c) {
+    auto it = groups.find(find(rows + c));
+    if (it != groups.end()) it->second.second.push_back(c);
+  }
+  std::vector<int> local_index(rows + cols, -1);
+  for (const auto& [root, members] : groups) {
+    for (size_t i = 0; i < members.first.size(); ++i) local_index[members.first[i]] = int(i);
+    for (size_t j = 0; j < members.second.size(); ++j) local_index[rows + members.second[j]] = int(j);
+  }
+  std::map<int, std::vector<double>> matrices;
+  for (const auto& [root, members] : groups)
+    matrices[root].assign(members.first.size() * members.second.size(), kNoAssignment);
+  for (const SparseCost& p : pairs) {
+    const auto& members = groups.at(find(p.row));
+    matrices[find(p.row)][size_t(local_index[p.row]) * members.second.size() + local_index[rows + p.col]] = p.cost;
+  }
+  std::vector<int> result(rows, -1);
+  for (const auto& [root, members] : groups) {
+    const int r = int(members.first.size()), c = int(members.second.size());
+    const std::vector<int> local = SolveAssignment(matrices.at(root), r, c);
+    for (int i = 0; i < r; ++i)
+      if (local[i] >= 0) result[members.first[i]] = members.second[local[i]];
+  }
+  return result;
 }
 
 // The online stage: returns the tracks (observation indices), in order of creation.
@@ -259,7 +397,16 @@ std::vector<std::vector<int>> LinkOnline(const std::vector<FrameDetections>& fra
     const int rows = static_cast<int>(active.size()), cols = static_cast<int>(obs.size());
     std::vector<Vector4d> predicted(rows);
     std::vector<Matrix4d> predicted_covariance(rows);
-    std::vector<double> cost(static_cast<size_t>(rows) * cols, kNoAssignment);
+    // Pairs within the position gate only: the gate's squared Mahalanobis
+    // distance bounds the distance by sqrt(gate x the largest eigenvalue of
+    // the innovation covariance).
+    double largest_observation_variance = 0.0;
+    for (int k : obs)
+      largest_observation_variance =
+          std::max(largest_observation_variance, LargestEigenvalue(observations[k].ground_covariance));
+    const GroundHash hash(observations, obs, 5.0);
+    std::vector<SparseCost> pairs;
+    std::map<std::pair<int, int>, unsigned> outliers_of_pair;
     for (int a = 0; a < rows; ++a) {
       const OnlineTrack& track = tracks[active[a]];
       const double dt = time - track.time;
@@ -267,16 +414,25 @@ std::vector<std::vector<int>> LinkOnline(const std::vector<FrameDetections>& fra
       predicted[a] = transition * track.state;
       predicted_covariance[a] = transition * track.covariance * transition.transpose() +
                                 ProcessNoise(dt, o.acceleration_sigma);
-      for (int k = 0; k < cols; ++k)
-        cost[static_cast<size_t>(a) * cols + k] =
-            AssociationCost(track, predicted[a], predicted_covariance[a], observations[obs[k]], o);
+      const double radius =
+          std::sqrt(o.gate_chi2 * (LargestEigenvalue(predicted_covariance[a].topLeftCorner<2, 2>()) +
+                                   largest_observation_variance)) + 1e-6;
+      for (int k : hash.Near(predicted[a].head<2>(), radius, cols)) {
+        unsigned outliers = 0;
+        const double c = AssociationCost(track, predicted[a], predicted_covariance[a], observations[obs[k]], o,
+                                         &outliers);
+        if (c >= kNoAssignment) continue;
+        pairs.push_back({a, k, c});
+        if (outliers != 0) outliers_of_pair[{a, k}] = outliers;
+      }
     }
-    const std::vector<int> assignment = SolveAssignment(cost, rows, cols);
+    const std::vector<int> assignment = SolveSparseAssignment(pairs, rows, cols);
     std::vector<char> taken(cols, 0);
     for (int a = 0; a < rows; ++a) {
       const int k = assignment[a];
       if (k < 0) continue;
       taken[k] = 1;
+      const auto outlying = outliers_of_pair.find({a, k});
       OnlineTrack& track = tracks[active[a]];
       const Observation& ob = observations[obs[k]];
       // Kalman update with the detected ground position (H = [I 0]).
@@ -287,7 +443,7 @@ std::vector<std::vector<int>> LinkOnline(const std::vector<FrameDetections>& fra
       const Matrix4d covariance = p - gain * p.topRows<2>();
       track.covariance = 0.5 * (covariance + covariance.transpose());
       track.time = time;
-      AddObservation(obs[k], ob, &track);
+      AddObservation(obs[k], ob, outlying == outliers_of_pair.end() ? 0u : outlying->second, &track);
       if (track.Count() >= o.confirm_hits) track.confirmed = true;
     }
     for (int k = 0; k < cols; ++k) {
@@ -300,7 +456,7 @@ std::vector<std::vector<int>> LinkOnline(const std::vector<FrameDetections>& fra
       const double s_v = o.max_speed / 2.0;
       track.covariance.bottomRightCorner<2, 2>() = s_v * s_v * Eigen::Matrix2d::Identity();
       track.time = time;
-      AddObservation(obs[k], ob, &track);
+      AddObservation(obs[k], ob, 0u, &track);
       track.confirmed = track.Count() >= o.confirm_hits;
       tracks.push_back(std::move(track));
       active.push_back(static_cast<int>(tracks.size()) - 1);
@@ -380,6 +536,14 @@ double LinkCost(const std::vector<Observation>& observations, const std::vector<
       axes.push_back(observations[m].axis);
     }
     *size /= double(members.size());
+    if (o.robust_cues) {  // the median of each dimension: one wrong box does not move it
+      for (int i = 0; i < 3; ++i) {
+        std::vector<double> v;
+        for (int m : members) v.push_back(observations[m].size[i]);
+        std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+        (*size)[i] = v[v.size() / 2];
+      }
+    }
     *height /= double(members.size());
     *height_var /= double(members.size()) * double(members.size());
     *axis = MeanAxis(axes);
@@ -389,10 +553,20 @@ double LinkCost(const std::vector<Observation>& observations, const std::vector<
   means(h, &size_h, &height_h, &var_h, &axis_h);
   means(t, &size_t, &height_t, &var_t, &axis_t);
   const double nh = double(h.size()), nt = double(t.size());
-  const double d2_size = (size_h - size_t).squaredNorm() / (o.size_sigma * o.size_sigma * (1.0 / nh + 1.0 / nt));
-  const double d2_height = (height_h - height_t) * (height_h - height_t) / (var_h + var_t);
-  const double axis_difference = AxisDifference(axis_h, axis_t);
-  if (std::abs(axis_difference) > o.yaw_gate_deg * kPi / 180.0) return kNoAssignment;
+  double d2_size = (size_h - size_t).squaredNorm() / (o.size_sigma * o.size_sigma * (1.0 / nh + 1.0 / nt));
+  double d2_height = (height_h - height_t) * (height_h - height_t) / (var_h + var_t);
+  double axis_difference = AxisDifference(axis_h, axis_t);
+  int outlying_cues = 0;
+  if (std::abs(axis_difference) > o.yaw_gate_deg * kPi / 180.0) {
+    if (!o.robust_cues) return kNoAssignment;
+    axis_difference = o.yaw_gate_deg * kPi / 180.0;
+    ++outlying_cues;
+  }
+  if (o.robust_cues) {  // a single cue outside its gate costs the gate's value
+    if (!(d2_size <= o.size_gate_chi2)) d2_size = o.size_gate_chi2, ++outlying_cues;
+    if (!(d2_height <= o.height_gate_chi2)) d2_height = o.height_gate_chi2, ++outlying_cues;
+    if (outlying_cues > 1) return kNoAssignment;
+  }
   const double s_yaw = o.yaw_sigma_deg * kPi / 180.0;
   const double turn = 0.5 * (t_tail - t_head);  // a turning car: up to ~0.5 rad/s
   const double d2_axis = axis_difference * axis_difference / (s_yaw * s_yaw * (1.0 / nh + 1.0 / nt) + turn * turn);
@@ -548,7 +722,7 @@ void FinishSummary(const std::vector<LinkedTrack>& tracks, int warn_median_lengt
 
 }  // namespace
 
-std::string TrackerOptions::ToJson() const { return OptionsToJson(*this).dump(); }
+std::string TrackerOptions::ToJson() const { return DumpJson(OptionsToJson(*this)); }
 
 std::string TrackingSummary::BriefReport() const {
   std::ostringstream s;
@@ -562,12 +736,16 @@ std::string TrackingSummary::BriefReport() const {
       << " detections):";
     for (const std::string& t : short_tracks) s << " [" << t << "]";
   }
+  if (num_duplicates > 0) {
+    s << "; dropped " << num_duplicates << " duplicate detection(s):";
+    for (const std::string& d : duplicates) s << " [" << d << "]";
+  }
   for (const std::string& w : warnings) s << "; WARNING: " << w;
   return s.str();
 }
 
 std::string TrackingSummary::ToJson() const {
-  const nlohmann::json j = {{"detections", num_detections},
+  nlohmann::json j = {{"detections", num_detections},
                             {"tracks", num_tracks},
                             {"median_track_length", median_track_length},
                             {"online_tracks", num_online_tracks},
@@ -576,7 +754,8 @@ std::string TrackingSummary::ToJson() const {
                             {"short_tracks_dropped", num_short_tracks},
                             {"short_track_detections", num_short_detections},
                             {"warnings", warnings}};
-  return j.dump();
+  if (num_duplicates > 0) j["duplicates"] = num_duplicates;  // added with duplicate flagging: only when some
+  return DumpJson(j);
 }
 
 std::vector<int> SolveAssignment(const std::vector<double>& cost, int rows, int cols) {
@@ -622,15 +801,50 @@ std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& fram
   const GroundFrame ground = MakeGroundFrame(frames);
   std::vector<Observation> observations;
   std::vector<std::vector<int>> observations_of_frame(frames.size());
+  int num_duplicates = 0;
+  std::vector<std::string> duplicates;
   for (size_t f = 0; f < frames.size(); ++f) {
+    // Earlier detections of this frame by 1 m cell of their bottom centre (camera x, z).
+    std::unordered_map<int64_t, std::vector<const ObjectLabel*>> seen;
+    auto cell_key = [](double x, double z) {
+      const auto i = int64_t(std::floor(std::clamp(x, -1e6, 1e6))), j = int64_t(std::floor(std::clamp(z, -1e6, 1e6)));
+      return (i << 32) ^ (j & 0xffffffff);
+    };
+    int frame_duplicates = 0;
     for (const ObjectLabel& label : frames[f].detections) {
       SAMP_CHECK(label.height > 0 && label.width > 0 && label.length > 0 && label.position.allFinite() &&
                  std::isfinite(label.rotation_y))
           << "LinkDetections: frame " << frames[f].frame << ": a detection has a non-positive size or "
           << "a non-finite position/yaw";
+      bool duplicate = false;
+      const double x = label.position.x(), z = label.position.z();
+      for (int dx = -1; dx <= 1 && !duplicate; ++dx)
+        for (int dz = -1; dz <= 1 && !duplicate; ++dz) {
+          const auto it = seen.find(cell_key(x + dx, z + dz));
+          if (it == seen.end()) continue;
+          for (const ObjectLabel* other : it->second) {
+            if ((other->position - label.position).norm() <= 0.01 &&
+                std::abs(other->height - label.height) <= 0.01 && std::abs(other->width - label.width) <= 0.01 &&
+                std::abs(other->length - label.length) <= 0.01 &&
+                std::abs(AxisDifference(other->rotation_y, label.rotation_y)) <= 0.5 * kPi / 180.0) {
+              duplicate = true;
+              break;
+            }
+          }
+        }
+      if (duplicate) {
+        ++frame_duplicates;
+        continue;
+      }
+      seen[cell_key(x, z)].push_back(&label);
       observations_of_frame[f].push_back(static_cast<int>(observations.size()));
       observations.push_back(
           MakeObservation(label, frames[f].frame, frames[f].world_from_camera, ground, options));
+    }
+    if (frame_duplicates > 0) {
+      num_duplicates += frame_duplicates;
+      duplicates.push_back("frame " + std::to_string(frames[f].frame) + ": " + std::to_string(frame_duplicates) +
+                           (frame_duplicates == 1 ? " duplicate" : " duplicates"));
     }
   }
 
@@ -638,7 +852,9 @@ std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& fram
   TrackingSummary local;
   TrackingSummary& result = summary != nullptr ? *summary : local;
   result = TrackingSummary();
-  result.num_detections = static_cast<int>(observations.size());
+  result.num_detections = static_cast<int>(observations.size()) + num_duplicates;
+  result.num_duplicates = num_duplicates;
+  result.duplicates = std::move(duplicates);
   result.num_online_tracks = static_cast<int>(tracks.size());
   for (int round = 0; round < 2; ++round) {
     const int swaps = options.resolve_switches ? ResolveSwitches(observations, options, &tracks) : 0;

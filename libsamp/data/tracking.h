@@ -34,8 +34,8 @@ struct TrackerOptions {
   // horizontal viewing ray along_sigma_a + along_sigma_b d + along_sigma_c d^2,
   // across it across_sigma_a + across_sigma_b d, vertically vertical_sigma_a +
   // vertical_sigma_b d. Defaults: a stereo 3D detector (median position error
-  // ~0.35 m below 20 m, ~0.6 m beyond 40 m, vertical 0.2-0.3 m; issue 11's
-  // detector model, docs/synthetic.md).
+  // ~0.35 m below 20 m, ~0.6 m beyond 40 m, vertical 0.2-0.3 m; the
+  // synthetic detector model, docs/synthetic.md).
   double along_sigma_a = 0.25, along_sigma_b = 0.015, along_sigma_c = 0.0;
   double across_sigma_a = 0.1, across_sigma_b = 0.005;
   double vertical_sigma_a = 0.2, vertical_sigma_b = 0.002;
@@ -83,6 +83,13 @@ struct TrackerOptions {
   double frame_rate_hz = 10.0;
   // The summary warns when a sequence's median track is shorter (frames).
   int warn_median_length = 5;
+  // Robust cues: a single cue (box size, height or axis) outside its gate
+  // costs its gate's value instead of forbidding the pair, so a wrong box
+  // length or a misturned box does not start a new track when position and
+  // motion agree (two cues outside their gates still forbid it); the outlying
+  // cue does not update the track's mean. The same holds for fragment joins.
+  // Off: every cue gates (the behaviour before; docs/detector_calibration.md).
+  bool robust_cues = false;
 
   void Check() const;  // throws samp::Error naming the field
   // Every field as a JSON object (for config.json; OptionFields below).
@@ -98,7 +105,7 @@ void OptionFields(OptionsJson& io, TrackerOptions& o);
 // of its frame under the detector noise model of `options` (along the
 // horizontal viewing ray, across it, vertically; TrackerOptions). The tracker
 // gates with it; the fitter weighs the detections as pose observations with
-// it (TrackFrame::detection_covariance, detection_position_cost.h).
+// it (TrackFrame::detection_covariance, fit/costs/detection_position.h).
 Eigen::Matrix3d DetectionCovariance(const Eigen::Vector3d& position, const TrackerOptions& options);
 
 // The detections of one frame, in its camera, with the ego pose.
@@ -125,6 +132,11 @@ struct TrackingSummary {
   int num_online_tracks = 0;    // tracks of the online stage, before joins and drops
   int num_joins = 0;            // fragment ends joined to a later fragment
   int num_swaps = 0;            // tails swapped between two tracks
+  // Detections identical to an earlier one of the same frame (bottom centre
+  // within 1 cm, box dimensions within 1 cm, axis within 0.5 degrees):
+  // dropped before linking and reported ("frame 4: 999 duplicates").
+  int num_duplicates = 0;
+  std::vector<std::string> duplicates;
   double median_track_length = 0.0;  // detections per kept track
   // "median track length 2.0 frames < 5: ..." when the median is short.
   std::vector<std::string> warnings;
@@ -134,6 +146,10 @@ struct TrackingSummary {
 
 // Links the detections of `frames` (in increasing frame order) into tracks.
 // Track ids are 0, 1, ... in order of first appearance (then detection index).
+// The online assignment is linear in the detections per frame: pairs beyond
+// the position gate are never formed (a spatial hash), and the assignment is
+// solved per connected group of gated pairs (the same optimum as one
+// assignment over all). Duplicate detections are dropped and counted.
 std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& frames,
                                         const TrackerOptions& options, TrackingSummary* summary);
 

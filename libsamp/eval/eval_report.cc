@@ -250,77 +250,88 @@ std::string ResultsJson(const EvalOptions& options, const EvalResults& results) 
   return DumpJson(j, 2) + "\n";
 }
 
-}  // namespace
-
-std::string EvalMarkdown(const EvalOptions& options, const EvalResults& results) {
+// The shape tables of matching k: at the headline tau, and F1 over tau.
+void MarkdownShape(const EvalOptions& options, const EvalResults& results, int k, std::ostringstream& md) {
   const EvalSummary& summary = results.summary;
   const std::vector<CarFrameRecord>& records = results.records;
   const size_t headline = summary.HeadlineIndex();
-  const int num_windows = results.num_windows;
-  std::ostringstream md;
   const std::string tau = Fixed(options.headline_tau, 2);
-  for (int k = 0; k < kNumMatchings; ++k) {
-    const std::vector<MethodShapeResult>& shape_results = k == kPerTrack ? summary.shape : summary.shape_per_frame;
-    const std::vector<MethodPoseResult>& pose_results = k == kPerTrack ? summary.pose : summary.pose_per_frame;
-    const std::string matching = std::string(" (") + kMatchingNames[k] + " matching)";
-    md << "### Shape at tau = " << tau << " m" << matching << "\n\n";
-    const int common_shape = shape_results.empty() ? 0 : shape_results[0].num_evaluated;
-    md << common_shape << " car-frames matched by every method (of " << records.size()
-       << " with >= " << options.min_segment_pixels << " visible pixels, " << summary.num_gt_tracks
-       << " tracks, " << options.sequences.size() << " sequences).";
-    md << (k == kPerTrack ? " Each true car is matched to one output track (the one sharing most IoU-matched "
-                            "frames with it): a fragmented or swapped track costs.\n\n"
-                          : " Each true car-frame is matched to the nearest box of any track within " +
-                                Fixed(options.per_frame_distance, 1) + " m: abstracts from tracking errors.\n\n");
-    md << "| Method | Accuracy [%] | Completeness [%] | F1 [%] | Matched car-frames |\n";
-    md << "|---|---:|---:|---:|---:|\n";
-    for (const MethodShapeResult& s : shape_results) {
-      md << "| " << s.method << " | " << Fixed(100 * s.accuracy[headline], 2) << " | "
-         << Fixed(100 * s.completeness[headline], 2) << " | " << Fixed(100 * s.f1[headline], 2) << " | "
-         << s.num_matched << " / " << records.size() << " |\n";
-    }
-    md << "\n### F1 [%] over tau" << matching << "\n\n| Method |";
-    for (double t : options.taus) md << " " << Fixed(t, 2) << " |";
-    md << "\n|---|";
-    for (size_t i = 0; i < options.taus.size(); ++i) md << "---:|";
-    md << "\n";
-    for (const MethodShapeResult& s : shape_results) {
-      md << "| " << s.method << " |";
-      for (double v : s.f1) md << " " << Fixed(100 * v, 2) << " |";
-      md << "\n";
-    }
-    md << "\n### Pose" << matching << "\n\n";
-    const int common_pose = pose_results.empty() ? 0 : pose_results[0].all.count;
-    md << common_pose << " car-frames matched by every method. Translation error of the object "
-       << "origin (m), absolute yaw error (deg, 180-degree flips count fully).\n\n";
-    md << "| Method | Distance | n | Transl. mean | Transl. median | Yaw mean | Yaw median |\n";
-    md << "|---|---|---:|---:|---:|---:|---:|\n";
-    for (const MethodPoseResult& p : pose_results) {
-      for (const auto& [name, w] : PoseRows(p)) {
-        md << "| " << p.method << " | " << name
-           << " | " << w.count << " | " << Fixed(w.translation_mean, 3) << " | "
-           << Fixed(w.translation_median, 3) << " | " << Fixed(w.yaw_mean_deg, 2) << " | "
-           << Fixed(w.yaw_median_deg, 2) << " |\n";
-      }
-    }
+  const std::vector<MethodShapeResult>& shape_results = k == kPerTrack ? summary.shape : summary.shape_per_frame;
+  const std::string matching = std::string(" (") + kMatchingNames[k] + " matching)";
+  md << "### Shape at tau = " << tau << " m" << matching << "\n\n";
+  const int common_shape = shape_results.empty() ? 0 : shape_results[0].num_evaluated;
+  md << common_shape << " car-frames matched by every method (of " << records.size()
+     << " with >= " << options.min_segment_pixels << " visible pixels, " << summary.num_gt_tracks
+     << " tracks, " << options.sequences.size() << " sequences).";
+  md << (k == kPerTrack ? " Each true car is matched to one output track (the one sharing most IoU-matched "
+                          "frames with it): a fragmented or swapped track costs.\n\n"
+                        : " Each true car-frame is matched to the nearest box of any track within " +
+                              Fixed(options.per_frame_distance, 1) + " m: abstracts from tracking errors.\n\n");
+  md << "| Method | Accuracy [%] | Completeness [%] | F1 [%] | Matched car-frames |\n";
+  md << "|---|---:|---:|---:|---:|\n";
+  for (const MethodShapeResult& s : shape_results) {
+    md << "| " << s.method << " | " << Fixed(100 * s.accuracy[headline], 2) << " | "
+       << Fixed(100 * s.completeness[headline], 2) << " | " << Fixed(100 * s.f1[headline], 2) << " | "
+       << s.num_matched << " / " << records.size() << " |\n";
+  }
+  md << "\n### F1 [%] over tau" << matching << "\n\n| Method |";
+  for (double t : options.taus) md << " " << Fixed(t, 2) << " |";
+  md << "\n|---|";
+  for (size_t i = 0; i < options.taus.size(); ++i) md << "---:|";
+  md << "\n";
+  for (const MethodShapeResult& s : shape_results) {
+    md << "| " << s.method << " |";
+    for (double v : s.f1) md << " " << Fixed(100 * v, 2) << " |";
     md << "\n";
   }
-  if (!summary.tracking.empty()) {
-    md << "### Tracking (CLEAR-MOT, per-frame matching within " << Fixed(options.per_frame_distance, 1)
-       << " m)\n\n";
-    md << "| Method | True cars | Output tracks | Tracks per car | Main track [%] | IDSW | FRAG | Missed cars "
-          "| False tracks | FN | FP | MOTA [%] | MOTP [m] |\n";
-    md << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (const MethodTrackingResult& t : summary.tracking) {
-      const TrackingCounts& c = t.counts;
-      md << "| " << t.method << " | " << c.true_cars << " | " << c.output_tracks << " | "
-         << Fixed(c.TracksPerCar(), 2) << " | " << Fixed(100 * c.MainTrackShare(), 1) << " | " << c.id_switches
-         << " | " << c.fragmentations << " | " << c.missed_cars << " | " << c.false_tracks << " | " << c.misses
-         << " | " << c.false_positives << " | " << Fixed(100 * c.Mota(), 1) << " | " << Fixed(c.Motp(), 3)
-         << " |\n";
+}
+
+// The pose table of matching k by distance window.
+void MarkdownPose(const EvalResults& results, int k, std::ostringstream& md) {
+  const EvalSummary& summary = results.summary;
+  const std::vector<MethodPoseResult>& pose_results = k == kPerTrack ? summary.pose : summary.pose_per_frame;
+  const std::string matching = std::string(" (") + kMatchingNames[k] + " matching)";
+  md << "\n### Pose" << matching << "\n\n";
+  const int common_pose = pose_results.empty() ? 0 : pose_results[0].all.count;
+  md << common_pose << " car-frames matched by every method. Translation error of the object "
+     << "origin (m), absolute yaw error (deg, 180-degree flips count fully).\n\n";
+  md << "| Method | Distance | n | Transl. mean | Transl. median | Yaw mean | Yaw median |\n";
+  md << "|---|---|---:|---:|---:|---:|---:|\n";
+  for (const MethodPoseResult& p : pose_results) {
+    for (const auto& [name, w] : PoseRows(p)) {
+      md << "| " << p.method << " | " << name
+         << " | " << w.count << " | " << Fixed(w.translation_mean, 3) << " | "
+         << Fixed(w.translation_median, 3) << " | " << Fixed(w.yaw_mean_deg, 2) << " | "
+         << Fixed(w.yaw_median_deg, 2) << " |\n";
     }
-    md << "\n";
   }
+  md << "\n";
+}
+
+// The CLEAR-MOT table of the results (none when there is no result).
+void MarkdownTracking(const EvalOptions& options, const EvalSummary& summary, std::ostringstream& md) {
+  if (summary.tracking.empty()) return;
+  md << "### Tracking (CLEAR-MOT, per-frame matching within " << Fixed(options.per_frame_distance, 1)
+     << " m)\n\n";
+  md << "| Method | True cars | Output tracks | Tracks per car | Main track [%] | IDSW | FRAG | Missed cars "
+        "| False tracks | FN | FP | MOTA [%] | MOTP [m] |\n";
+  md << "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const MethodTrackingResult& t : summary.tracking) {
+    const TrackingCounts& c = t.counts;
+    md << "| " << t.method << " | " << c.true_cars << " | " << c.output_tracks << " | "
+       << Fixed(c.TracksPerCar(), 2) << " | " << Fixed(100 * c.MainTrackShare(), 1) << " | " << c.id_switches
+       << " | " << c.fragmentations << " | " << c.missed_cars << " | " << c.false_tracks << " | " << c.misses
+       << " | " << c.false_positives << " | " << Fixed(100 * c.Mota(), 1) << " | " << Fixed(c.Motp(), 3)
+       << " |\n";
+  }
+  md << "\n";
+}
+
+// The per-car diagnostics by distance band.
+void MarkdownDiagnostics(const EvalOptions& options, const EvalResults& results, std::ostringstream& md) {
+  const EvalSummary& summary = results.summary;
+  const int num_windows = results.num_windows;
+  const std::string tau = Fixed(options.headline_tau, 2);
   md << "### Per-car diagnostics (per-frame matching, medians)\n\n"
      << "Offset of the estimated origin from the true one along the viewing ray (+ = farther), |across| and "
         "|vertical|; estimated minus true box size; F1 at tau = "
@@ -337,6 +348,18 @@ std::string EvalMarkdown(const EvalOptions& options, const EvalResults& results)
        << Fixed(b.size_error[1], 3) << " | " << Fixed(b.size_error[2], 3) << " | "
        << (b.num_shape > 0 ? Fixed(100 * b.f1, 2) : std::string("-")) << " |\n";
   }
+}
+
+}  // namespace
+
+std::string EvalMarkdown(const EvalOptions& options, const EvalResults& results) {
+  std::ostringstream md;
+  for (int k = 0; k < kNumMatchings; ++k) {
+    MarkdownShape(options, results, k, md);
+    MarkdownPose(results, k, md);
+  }
+  MarkdownTracking(options, results.summary, md);
+  MarkdownDiagnostics(options, results, md);
   return md.str();
 }
 

@@ -109,7 +109,7 @@ struct EvalSummary {
   int num_sequences = 0;
   int num_gt_car_frames = 0;   // with a large enough segment
   int num_gt_tracks = 0;
-  // Per-track matching (each true car gets one output track; as before).
+  // Per-track matching (each true car gets one output track).
   std::vector<MethodShapeResult> shape;
   std::vector<MethodPoseResult> pose;
   // Per-frame matching (each true car-frame gets the nearest box of any track).

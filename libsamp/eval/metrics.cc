@@ -8,6 +8,7 @@
 #include <set>
 
 #include "libsamp/core/error.h"
+#include "libsamp/core/pose.h"
 #include "libsamp/data/tracking.h"
 
 namespace samp {
@@ -48,7 +49,6 @@ ShapeComparison CompareShapes(const std::vector<Eigen::Vector3d>& estimated,
 }
 
 double YawErrorDeg(double estimated_yaw, double true_yaw) {
-  constexpr double kPi = 3.14159265358979323846;
   double d = std::fmod(std::abs(estimated_yaw - true_yaw), 2.0 * kPi);
   if (d > kPi) d = 2.0 * kPi - d;
   return d * 180.0 / kPi;
@@ -92,99 +92,102 @@ double TrackingCounts::TracksPerCar() const {
 
 double TrackingCounts::MainTrackShare() const { return matches > 0 ? double(in_main_track) / matches : 0.0; }
 
-std::vector<int> MatchTracks(const std::vector<TrackedBox>& truth, const std::vector<TrackedBox>& output,
-                             double max_distance, TrackingCounts* counts) {
-  SAMP_CHECK(max_distance > 0) << "MatchTracks: max_distance must be > 0";
-  std::map<int, std::vector<int>> truth_of_frame, output_of_frame;
-  for (size_t i = 0; i < truth.size(); ++i) truth_of_frame[truth[i].frame].push_back(int(i));
-  for (size_t i = 0; i < output.size(); ++i) output_of_frame[output[i].frame].push_back(int(i));
-  // An output box without a track id is a track of its own.
-  auto track_key = [&](int o) { return output[o].track_id >= 0 ? output[o].track_id : -1 - o; };
-  std::vector<int> match(truth.size(), -1);
-  std::vector<int> truth_of_output(output.size(), -1);
-  std::map<int, int> last_track;  // true car -> output track of its previous matched frame
-  for (const auto& [frame, t_boxes] : truth_of_frame) {
-    const auto found = output_of_frame.find(frame);
-    if (found == output_of_frame.end()) continue;
-    const std::vector<int>& o_boxes = found->second;
-    auto distance = [&](int t, int o) { return (truth[t].position - output[o].position).norm(); };
-    // 1. Correspondences of the previous matched frame that still hold.
-    for (int t : t_boxes) {
-      const auto last = last_track.find(truth[t].track_id);
-      if (last == last_track.end()) continue;
-      for (int o : o_boxes) {
-        if (truth_of_output[o] >= 0 || track_key(o) != last->second || distance(t, o) > max_distance) continue;
-        match[t] = o, truth_of_output[o] = t;
-        break;
-      }
-    }
-    // 2. The rest: Hungarian on the distance.
-    std::vector<int> rows, cols;
-    for (int t : t_boxes)
-      if (match[t] < 0) rows.push_back(t);
-    for (int o : o_boxes)
-      if (truth_of_output[o] < 0) cols.push_back(o);
-    std::vector<double> cost(rows.size() * cols.size(), kNoAssignment);
-    for (size_t r = 0; r < rows.size(); ++r)
-      for (size_t c = 0; c < cols.size(); ++c) {
-        const double d = distance(rows[r], cols[c]);
-        if (d <= max_distance) cost[r * cols.size() + c] = d;
-      }
-    const std::vector<int> assigned = SolveAssignment(cost, int(rows.size()), int(cols.size()));
-    for (size_t r = 0; r < rows.size(); ++r) {
-      if (assigned[r] < 0) continue;
-      match[rows[r]] = cols[assigned[r]];
-      truth_of_output[cols[assigned[r]]] = rows[r];
-    }
-    for (int t : t_boxes)
-      if (match[t] >= 0) last_track[truth[t].track_id] = track_key(match[t]);
-  }
-  if (counts == nullptr) return match;
+namespace {
 
+// The output track of output box o; a box without a track id is a track of its own.
+int TrackKey(const std::vector<TrackedBox>& output, int o) {
+  return output[o].track_id >= 0 ? output[o].track_id : -1 - o;
+}
+
+// Matches the true boxes `t_boxes` of one frame to its output boxes `o_boxes`:
+// first the correspondences of each car's previous matched frame that still
+// hold, then the rest by Hungarian on the distance. Updates *last_track (true
+// car -> output track of its last matched frame).
+void MatchFrame(const std::vector<TrackedBox>& truth, const std::vector<TrackedBox>& output,
+                const std::vector<int>& t_boxes, const std::vector<int>& o_boxes, double max_distance,
+                std::vector<int>* match, std::vector<int>* truth_of_output, std::map<int, int>* last_track) {
+  auto distance = [&](int t, int o) { return (truth[t].position - output[o].position).norm(); };
+  for (int t : t_boxes) {
+    const auto last = last_track->find(truth[t].track_id);
+    if (last == last_track->end()) continue;
+    for (int o : o_boxes) {
+      if ((*truth_of_output)[o] >= 0 || TrackKey(output, o) != last->second || distance(t, o) > max_distance) continue;
+      (*match)[t] = o, (*truth_of_output)[o] = t;
+      break;
+    }
+  }
+  std::vector<int> rows, cols;
+  for (int t : t_boxes)
+    if ((*match)[t] < 0) rows.push_back(t);
+  for (int o : o_boxes)
+    if ((*truth_of_output)[o] < 0) cols.push_back(o);
+  std::vector<double> cost(rows.size() * cols.size(), kNoAssignment);
+  for (size_t r = 0; r < rows.size(); ++r)
+    for (size_t c = 0; c < cols.size(); ++c) {
+      const double d = distance(rows[r], cols[c]);
+      if (d <= max_distance) cost[r * cols.size() + c] = d;
+    }
+  const std::vector<int> assigned = SolveAssignment(cost, int(rows.size()), int(cols.size()));
+  for (size_t r = 0; r < rows.size(); ++r) {
+    if (assigned[r] < 0) continue;
+    (*match)[rows[r]] = cols[assigned[r]];
+    (*truth_of_output)[cols[assigned[r]]] = rows[r];
+  }
+  for (int t : t_boxes)
+    if ((*match)[t] >= 0) (*last_track)[truth[t].track_id] = TrackKey(output, (*match)[t]);
+}
+
+// The counts of one true car over its boxes in frame order (ignored boxes skipped).
+void CountCar(const std::vector<TrackedBox>& truth, const std::vector<TrackedBox>& output,
+              const std::vector<int>& match, const std::vector<int>& boxes, TrackingCounts* c) {
+  std::map<int, int> per_track;
+  bool counted = false, was_matched = false, gap = false;
+  int previous = 0;
+  bool has_previous = false;
+  for (int t : boxes) {
+    if (truth[t].ignore) continue;
+    counted = true;
+    ++c->true_boxes;
+    if (match[t] < 0) {
+      ++c->misses;
+      if (was_matched) gap = true;
+      continue;
+    }
+    ++c->matches;
+    c->distance_sum += (truth[t].position - output[match[t]].position).norm();
+    const int key = TrackKey(output, match[t]);
+    ++per_track[key];
+    if (has_previous && key != previous) ++c->id_switches;
+    if (gap) ++c->fragmentations;
+    previous = key, has_previous = true, was_matched = true, gap = false;
+  }
+  if (!counted) return;
+  ++c->true_cars;
+  if (per_track.empty()) {
+    ++c->missed_cars;
+    return;
+  }
+  c->tracks_on_cars += int(per_track.size());
+  int main = 0;
+  for (const auto& [key, n] : per_track) main = std::max(main, n);
+  c->in_main_track += main;
+}
+
+// The CLEAR-MOT counts of a matching.
+TrackingCounts CountTracking(const std::vector<TrackedBox>& truth, const std::vector<TrackedBox>& output,
+                             const std::map<int, std::vector<int>>& truth_of_frame, const std::vector<int>& match,
+                             const std::vector<int>& truth_of_output) {
   TrackingCounts c;
-  // Per true car, its boxes in frame order.
-  std::map<int, std::vector<int>> boxes_of_car;
+  std::map<int, std::vector<int>> boxes_of_car;  // per true car, its boxes in frame order
   for (const auto& [frame, t_boxes] : truth_of_frame)
     for (int t : t_boxes) boxes_of_car[truth[t].track_id].push_back(t);
   std::set<int> matched_tracks;  // output tracks matched to any true box
   for (size_t o = 0; o < output.size(); ++o)
-    if (truth_of_output[o] >= 0) matched_tracks.insert(track_key(int(o)));
-  for (const auto& [car, boxes] : boxes_of_car) {
-    std::map<int, int> per_track;
-    bool counted = false, was_matched = false, gap = false;
-    int previous = 0;
-    bool has_previous = false;
-    for (int t : boxes) {
-      if (truth[t].ignore) continue;
-      counted = true;
-      ++c.true_boxes;
-      if (match[t] < 0) {
-        ++c.misses;
-        if (was_matched) gap = true;
-        continue;
-      }
-      ++c.matches;
-      c.distance_sum += (truth[t].position - output[match[t]].position).norm();
-      const int key = track_key(match[t]);
-      ++per_track[key];
-      if (has_previous && key != previous) ++c.id_switches;
-      if (gap) ++c.fragmentations;
-      previous = key, has_previous = true, was_matched = true, gap = false;
-    }
-    if (!counted) continue;
-    ++c.true_cars;
-    if (per_track.empty()) {
-      ++c.missed_cars;
-      continue;
-    }
-    c.tracks_on_cars += int(per_track.size());
-    int main = 0;
-    for (const auto& [key, n] : per_track) main = std::max(main, n);
-    c.in_main_track += main;
-  }
+    if (truth_of_output[o] >= 0) matched_tracks.insert(TrackKey(output, int(o)));
+  for (const auto& [car, boxes] : boxes_of_car) CountCar(truth, output, match, boxes, &c);
   std::set<int> tracks;
   for (size_t o = 0; o < output.size(); ++o) {
-    tracks.insert(track_key(int(o)));
+    tracks.insert(TrackKey(output, int(o)));
     const int t = truth_of_output[o];
     if (t >= 0 && truth[t].ignore) continue;
     ++c.output_boxes;
@@ -192,7 +195,26 @@ std::vector<int> MatchTracks(const std::vector<TrackedBox>& truth, const std::ve
   }
   c.output_tracks = int(tracks.size());
   for (int key : tracks) c.false_tracks += matched_tracks.count(key) == 0;
-  counts->Add(c);
+  return c;
+}
+
+}  // namespace
+
+std::vector<int> MatchTracks(const std::vector<TrackedBox>& truth, const std::vector<TrackedBox>& output,
+                             double max_distance, TrackingCounts* counts) {
+  SAMP_CHECK(max_distance > 0) << "MatchTracks: max_distance must be > 0";
+  std::map<int, std::vector<int>> truth_of_frame, output_of_frame;
+  for (size_t i = 0; i < truth.size(); ++i) truth_of_frame[truth[i].frame].push_back(int(i));
+  for (size_t i = 0; i < output.size(); ++i) output_of_frame[output[i].frame].push_back(int(i));
+  std::vector<int> match(truth.size(), -1);
+  std::vector<int> truth_of_output(output.size(), -1);
+  std::map<int, int> last_track;
+  for (const auto& [frame, t_boxes] : truth_of_frame) {
+    const auto found = output_of_frame.find(frame);
+    if (found == output_of_frame.end()) continue;
+    MatchFrame(truth, output, t_boxes, found->second, max_distance, &match, &truth_of_output, &last_track);
+  }
+  if (counts != nullptr) counts->Add(CountTracking(truth, output, truth_of_frame, match, truth_of_output));
   return match;
 }
 

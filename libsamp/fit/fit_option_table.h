@@ -6,7 +6,7 @@
 #pragma once
 
 #include "libsamp/core/option_table.h"
-#include "libsamp/fit/fitter.h"
+#include "libsamp/fit/fit_options.h"
 
 namespace samp {
 

@@ -182,7 +182,7 @@ ShapeModel ShapeModel::Load(const std::string& path, const VdbReadOptions& optio
   model.eigenvalues.resize(num_components);
   for (int r = 0; r < num_components; ++r) {
     SAMP_CHECK(eigenvalues[r].is_number())
-        << path << ": eigenvalue " << r << " is not a number: " << eigenvalues[r].dump();
+        << path << ": eigenvalue " << r << " is not a number: " << DumpJson(eigenvalues[r]);
     model.eigenvalues[r] = eigenvalues[r].get<double>();
   }
   if (meta.count(kTotalVarianceKey) > 0) {
@@ -194,7 +194,7 @@ ShapeModel ShapeModel::Load(const std::string& path, const VdbReadOptions& optio
   SAMP_CHECK(shapes.is_array()) << path << ": " << kTrainingShapesKey << " is not a JSON list";
   for (const auto& name : shapes) {
     SAMP_CHECK(name.is_string()) << path << ": " << kTrainingShapesKey
-                                 << " holds a non-string entry " << name.dump();
+                                 << " holds a non-string entry " << DumpJson(name);
     model.training_shapes.push_back(name.get<std::string>());
   }
   model.options_json = DumpJson(ParseJsonMeta(meta, path, kOptionsKey));

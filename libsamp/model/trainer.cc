@@ -1,6 +1,7 @@
 #include "libsamp/model/trainer.h"
 
 #include <tbb/parallel_for.h>
+#include <sys/stat.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -33,17 +34,6 @@ double SecondsSince(Clock::time_point start) {
 
 nlohmann::json Vector3Json(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
-// One mesh file of the CAD folder and how to treat it.
-struct Job {
-  std::string path;           // as found
-  std::string relative_path;  // relative to the CAD folder, '/'-separated
-  std::string name;
-  CanonicalizeOptions canonicalize;
-  bool skip = false;
-  std::string skip_reason;
-  Eigen::Vector3d size_factors = Eigen::Vector3d::Ones();  // TrainOptions::size_variants
-};
-
 std::string VariantName(const std::string& name, const Eigen::Vector3d& f) {
   char suffix[64];
   std::snprintf(suffix, sizeof(suffix), "@%.2fx%.2fx%.2f", f.x(), f.y(), f.z());
@@ -51,12 +41,12 @@ std::string VariantName(const std::string& name, const Eigen::Vector3d& f) {
 }
 
 // Each usable job, then one stretched copy per size variant of it.
-std::vector<Job> AddSizeVariants(std::vector<Job> jobs, const std::vector<Eigen::Vector3d>& variants) {
+std::vector<TrainJob> AddSizeVariants(std::vector<TrainJob> jobs, const std::vector<Eigen::Vector3d>& variants) {
   const size_t originals = jobs.size();
   for (const Eigen::Vector3d& f : variants) {
     for (size_t i = 0; i < originals; ++i) {
       if (jobs[i].skip) continue;
-      Job copy = jobs[i];
+      TrainJob copy = jobs[i];
       copy.name = VariantName(jobs[i].name, f);
       copy.size_factors = f;
       jobs.push_back(std::move(copy));
@@ -65,15 +55,15 @@ std::vector<Job> AddSizeVariants(std::vector<Job> jobs, const std::vector<Eigen:
   return jobs;
 }
 
-std::vector<Job> FindJobs(const TrainOptions& options, const Manifest* manifest) {
+std::vector<TrainJob> FindJobs(const TrainOptions& options, const Manifest* manifest) {
   const fs::path folder(options.cad_folder);
   std::error_code ec;
   SAMP_CHECK(fs::is_directory(folder, ec))
       << "CAD folder '" << options.cad_folder << "' is not a directory";
-  std::vector<Job> jobs;
+  std::vector<TrainJob> jobs;
   std::map<const ManifestEntry*, int> matched;
   for (const CadFile& file : ListCadFiles(options.cad_folder, manifest)) {
-    Job job;
+    TrainJob job;
     job.path = file.path;
     job.relative_path = file.relative_path;
     job.name = file.name;
@@ -100,8 +90,8 @@ std::vector<Job> FindJobs(const TrainOptions& options, const Manifest* manifest)
   // Names must be unique (they name the training shapes and the SDF files):
   // clashing ones become their relative path without extension.
   std::map<std::string, int> count;
-  for (const Job& job : jobs) ++count[job.name];
-  for (Job& job : jobs) {
+  for (const TrainJob& job : jobs) ++count[job.name];
+  for (TrainJob& job : jobs) {
     if (count[job.name] > 1) {
       const fs::path relative(job.relative_path);
       job.name = (relative.parent_path() / relative.stem()).generic_string();
@@ -112,7 +102,7 @@ std::vector<Job> FindJobs(const TrainOptions& options, const Manifest* manifest)
 }
 
 // The per-model SDF file: one FloatGrid "sdf" with the model's provenance.
-void SaveModelSdf(const std::string& path, const Sdf& sdf, const Job& job,
+void SaveModelSdf(const std::string& path, const Sdf& sdf, const TrainJob& job,
                   const CanonicalizeResult& canonical) {
   VdbMetadata meta;
   meta["samp_file_type"] = "sdf";
@@ -299,14 +289,99 @@ ScannedSdf ScanToSdf(const Mesh& canonical_mesh, const ScanOptions& scan, const 
   return result;
 }
 
-TrainSummary TrainShapeModel(const TrainOptions& options) {
-  options.Check();
-  const auto start = Clock::now();
+std::vector<TrainJob> ListTrainJobs(const TrainOptions& options) {
   Manifest manifest;
   const bool has_manifest = !options.manifest_path.empty();
   if (has_manifest) manifest = LoadManifest(options.manifest_path);
-  const std::vector<Job> jobs =
-      AddSizeVariants(FindJobs(options, has_manifest ? &manifest : nullptr), options.size_variants);
+  return AddSizeVariants(FindJobs(options, has_manifest ? &manifest : nullptr), options.size_variants);
+}
+
+TrainedShape TrainJobSdf(const TrainJob& job, const TrainOptions& options, std::vector<float>* values) {
+  TrainedShape shape;
+  shape.name = job.name;
+  shape.file = job.relative_path;
+  shape.size_factors = job.size_factors;
+  if (job.skip) {
+    shape.reject_reason = "skipped by the manifest: " + job.skip_reason;
+    return shape;
+  }
+  values->clear();
+  const auto model_start = Clock::now();
+  try {
+    const CanonicalizeResult canonical = CanonicalCad(job.path, job.canonicalize, job.size_factors);
+    for (const std::string& warning : canonical.warnings) {
+      LogWarning() << job.relative_path << ": " << warning;
+    }
+    shape.scale = canonical.scale;
+    shape.size = canonical.size;
+    ScannedSdf scanned = ScanToSdf(canonical.mesh, options.scan, options.grid, options.sdf);
+    Sdf& sdf = scanned.sdf;
+    shape.inside_fraction = sdf.summary.inside_fraction;
+    SAMP_CHECK(sdf.summary.sign_ok)
+        << "sign failed: inside fraction " << sdf.summary.inside_fraction
+        << " below the minimum " << options.sdf.min_inside_fraction
+        << " (open or inverted mesh, or not a car?)";
+    shape.quality = CheckSdfQuality(sdf, canonical.mesh.Bounds(), options.gate);
+    SAMP_CHECK(shape.quality.pass) << "SDF quality gate: " << shape.quality.reason;
+    SAMP_CHECK(int64_t(sdf.values.size()) == options.grid.NumVoxels())
+        << "SDF has " << sdf.values.size() << " values, expected "
+        << options.grid.NumVoxels();
+    if (!options.sdf_folder.empty()) {
+      std::string file_name = job.name + ".vdb";
+      SaveModelSdf((fs::path(options.sdf_folder) / file_name).string(), sdf, job, canonical);
+    }
+    *values = std::move(sdf.values);
+    shape.used = true;
+  } catch (const std::exception& e) {
+    shape.reject_reason = e.what();
+  } catch (...) {
+    shape.reject_reason = "unknown error";
+  }
+  shape.seconds = SecondsSince(model_start);
+  return shape;
+}
+
+namespace {
+
+// Refuses outputs (the model file, the --sdf-dir files) that are inputs
+// (a mesh of the CAD folder, the manifest), by resolved path or by device
+// and inode (a hard link), before anything is computed.
+void CheckOutputsAreNotInputs(const TrainOptions& options, const std::vector<TrainJob>& jobs) {
+  auto resolved = [](const std::string& path) {
+    std::error_code ec;
+    const fs::path r = fs::weakly_canonical(fs::absolute(path), ec);
+    return ec ? fs::absolute(path).lexically_normal().string() : r.string();
+  };
+  std::map<std::string, std::string> inputs;  // resolved path or "inode dev:ino" -> what
+  auto add_input = [&](const std::string& path, const std::string& what) {
+    inputs.emplace(resolved(path), what);
+    struct stat st;
+    if (::stat(path.c_str(), &st) == 0)
+      inputs.emplace("inode " + std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino), what);
+  };
+  for (const TrainJob& job : jobs) add_input(job.path, "the input mesh " + job.path);
+  if (!options.manifest_path.empty()) add_input(options.manifest_path, "the manifest " + options.manifest_path);
+  auto check = [&](const std::string& what, const std::string& output) {
+    auto it = inputs.find(resolved(output));
+    struct stat st;
+    if (it == inputs.end() && ::stat(output.c_str(), &st) == 0)
+      it = inputs.find("inode " + std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino));
+    SAMP_CHECK(it == inputs.end()) << "train: the " << what << " " << output << " is " << it->second
+                                   << "; samp never writes over its inputs: give another output path";
+  };
+  check("model file", options.output_path);
+  if (!options.sdf_folder.empty()) {
+    for (const TrainJob& job : jobs) check("SDF file", (fs::path(options.sdf_folder) / (job.name + ".vdb")).string());
+  }
+}
+
+}  // namespace
+
+TrainSummary TrainShapeModel(const TrainOptions& options) {
+  options.Check();
+  const auto start = Clock::now();
+  const std::vector<TrainJob> jobs = ListTrainJobs(options);
+  CheckOutputsAreNotInputs(options, jobs);
   const int num_jobs = int(jobs.size());
   LogInfo() << "training a shape model from " << num_jobs << " mesh files in "
             << options.cad_folder << " on the grid " << options.grid.ToString();
@@ -330,44 +405,13 @@ TrainSummary TrainShapeModel(const TrainOptions& options) {
   Progress progress("scanning", num_jobs, options.show_progress);
   arena.execute([&] {
     tbb::parallel_for(0, num_jobs, 1, [&](int i) {
-      const Job& job = jobs[i];
+      const TrainJob& job = jobs[i];
       TrainedShape& shape = summary.shapes[i];
       if (job.skip) {
         progress.Tick();
         return;
       }
-      const auto model_start = Clock::now();
-      try {
-        const CanonicalizeResult canonical = CanonicalCad(job.path, job.canonicalize, job.size_factors);
-        for (const std::string& warning : canonical.warnings) {
-          LogWarning() << job.relative_path << ": " << warning;
-        }
-        shape.scale = canonical.scale;
-        shape.size = canonical.size;
-        ScannedSdf scanned = ScanToSdf(canonical.mesh, options.scan, options.grid, options.sdf);
-        Sdf& sdf = scanned.sdf;
-        shape.inside_fraction = sdf.summary.inside_fraction;
-        SAMP_CHECK(sdf.summary.sign_ok)
-            << "sign failed: inside fraction " << sdf.summary.inside_fraction
-            << " below the minimum " << options.sdf.min_inside_fraction
-            << " (open or inverted mesh, or not a car?)";
-        shape.quality = CheckSdfQuality(sdf, canonical.mesh.Bounds(), options.gate);
-        SAMP_CHECK(shape.quality.pass) << "SDF quality gate: " << shape.quality.reason;
-        SAMP_CHECK(int64_t(sdf.values.size()) == options.grid.NumVoxels())
-            << "SDF has " << sdf.values.size() << " values, expected "
-            << options.grid.NumVoxels();
-        if (!options.sdf_folder.empty()) {
-          std::string file_name = job.name + ".vdb";
-          SaveModelSdf((fs::path(options.sdf_folder) / file_name).string(), sdf, job, canonical);
-        }
-        sdf_values[i] = std::move(sdf.values);
-        shape.used = true;
-      } catch (const std::exception& e) {
-        shape.reject_reason = e.what();
-      } catch (...) {
-        shape.reject_reason = "unknown error";
-      }
-      shape.seconds = SecondsSince(model_start);
+      shape = TrainJobSdf(job, options, &sdf_values[i]);
       if (!shape.used) LogWarning() << "skipping " << job.relative_path << ": " << shape.reject_reason;
       progress.Tick();
     });

@@ -72,6 +72,28 @@ struct TrainSummary {
 // Throws samp::Error when fewer than R + 1 usable models remain (after reporting each rejection).
 TrainSummary TrainShapeModel(const TrainOptions& options);
 
+// The steps of TrainShapeModel one by one, for training elsewhere than in
+// one process (the Python package's samp.batch train computes the SDFs on
+// Dask workers and the PCA on the client; docs/cluster.md):
+// ListTrainJobs lists the models as TrainShapeModel does (the CAD folder's
+// mesh files in order, the manifest applied, then the size variants);
+// TrainJobSdf computes one model's SDF as TrainShapeModel does (canonicalise,
+// scan, SDF, quality gate, the sdf_folder file), filling `values` (D floats)
+// when the model is usable; a rejection is in the returned shape's
+// reject_reason, not thrown. Thread-safe for distinct `values`.
+struct TrainJob {
+  std::string path;           // as found
+  std::string relative_path;  // relative to the CAD folder, '/'-separated
+  std::string name;           // the training shape's name (unique)
+  CanonicalizeOptions canonicalize;
+  bool skip = false;          // skipped by the manifest
+  std::string skip_reason;
+  Eigen::Vector3d size_factors = Eigen::Vector3d::Ones();  // TrainOptions::size_variants
+};
+// Throws samp::Error when the CAD folder or the manifest cannot be read or holds no mesh.
+std::vector<TrainJob> ListTrainJobs(const TrainOptions& options);
+TrainedShape TrainJobSdf(const TrainJob& job, const TrainOptions& options, std::vector<float>* values);
+
 // The chain from one CAD file to its SDF, written once for the trainer and
 // `samp inspect --encode` (which encodes a CAD file as training would):
 // CanonicalCad loads the mesh and puts it into the canonical frame, stretched

@@ -1,3 +1,4 @@
+#include "libsamp/core/json_text.h"
 #include "libsamp/pipeline/fit_config.h"
 
 #include "libsamp/core/atomic_file.h"
@@ -65,12 +66,15 @@ void OptionFields(OptionsJson& io, RunFitOptions& o) {
   io("num_threads", o.num_threads);
   io("write_meshes", o.write_meshes);
   io("link_only", o.link_only);
+  // Detector calibration (issue 28; run_fit.h), written only when used.
+  io.Optional("self_calibrate", o.self_calibrate, false);
+  io.Optional("detector_model", o.detector_model_path, std::string());
 }
 
 void WriteFitConfig(const std::string& path, const FitConfig& config) {
   nlohmann::json j = OptionsToJson(config.options);
   j["model_components"] = config.model_components;
-  WriteTextFileAtomically(path, j.dump(2) + "\n");
+  WriteTextFileAtomically(path, DumpJson(j, 2) + "\n");
 }
 
 FitConfig ReadFitConfig(const std::string& path) {

@@ -1,7 +1,9 @@
+#include "libsamp/core/json_text.h"
 #include "libsamp/pipeline/fit_output.h"
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
@@ -223,7 +225,7 @@ void WriteTracksFile(const std::string& path, const TracksFile& file) {
     js["failed_tracks"] = r.failed_tracks;
     tracks_json["sequences"].push_back(js);
   }
-  WriteTextFileAtomically(path, tracks_json.dump(2) + "\n");
+  WriteTextFileAtomically(path, DumpJson(tracks_json, 2) + "\n");
 }
 
 TracksFile ReadTracksFile(const std::string& path) {
@@ -253,6 +255,16 @@ TracksFile ReadTracksFile(const std::string& path) {
     file.sequences.push_back(std::move(r));
   }
   return file;
+}
+
+std::string FitTracksPath(const std::string& out) { return (std::filesystem::path(out) / "tracks.json").string(); }
+
+std::string FitLabelsPath(const std::string& out, const std::string& seq) {
+  return (std::filesystem::path(out) / "label_02" / (seq + ".txt")).string();
+}
+
+std::string FitMeshStem(const std::string& seq, int track_id, bool per_sequence_folder) {
+  return (per_sequence_folder ? "meshes/" + seq + "/" : std::string("meshes/")) + "track_" + std::to_string(track_id);
 }
 
 }  // namespace samp

@@ -41,6 +41,15 @@ PointCloud AlignedObservations(const TrackFit& fit);
 nlohmann::json TrackFitToJson(const TrackFit& fit, const AlignedBox& box);
 TrackFit TrackFitFromJson(const JsonFields& fields, AlignedBox* box = nullptr);
 
+// The paths of a fit's output folder OUT (docs/fitting.md "Output"):
+// OUT/tracks.json, OUT/label_02/<seq>.txt, and the meshes of track <id>:
+// OUT/meshes/track_<id>.ply and track_<id>_points.ply, in OUT/meshes/<seq>/
+// when the fit had several sequences.
+std::string FitTracksPath(const std::string& out);
+std::string FitLabelsPath(const std::string& out, const std::string& seq);
+// A track's mesh path relative to OUT, without ".ply": "meshes/[<seq>/]track_<id>".
+std::string FitMeshStem(const std::string& seq, int track_id, bool per_sequence_folder);
+
 // OUT/tracks.json (docs/fitting.md "Output").
 struct TracksFileTrack {
   TrackFit fit;              // frames without points_in_world

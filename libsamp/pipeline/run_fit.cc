@@ -34,8 +34,11 @@ void RunFitOptions::Check() const {
   SAMP_CHECK(!output_dir.empty()) << "RunFitOptions.output_dir is empty";
   SAMP_CHECK(num_threads >= 0) << "RunFitOptions.num_threads must be >= 0 (0 = all cores), is "
                                << num_threads;
+  SAMP_CHECK(!(self_calibrate && !detector_model_path.empty()))
+      << "RunFitOptions: self_calibrate and detector_model_path exclude each other (give one)";
   fit.Check();
   sequence.Check();
+  calibration.Check();
 }
 
 std::string RunFitSummary::BriefReport() const {
@@ -53,6 +56,7 @@ std::string RunFitSummary::BriefReport() const {
       << q.input.tracking.BriefReport();
     for (const auto& f : q.track_failures) s << "\n    skipped " << f;
   }
+  if (detector_model_used) s << "\n  detector model: " << calibration_report;
   return s.str();
 }
 
@@ -63,49 +67,39 @@ struct SequenceWork {
   std::vector<TracksFileTrack> tracks;  // for tracks.json
 };
 
-// True when `path` is `folder` or inside it (both absolute and normal).
-bool IsWithin(fs::path path, fs::path folder) {
-  if (!path.has_filename() && path.has_parent_path()) path = path.parent_path();  // "a/b/"
-  if (!folder.has_filename() && folder.has_parent_path()) folder = folder.parent_path();
-  const fs::path relative = path.lexically_relative(folder);
-  return !relative.empty() && *relative.begin() != "..";
-}
-
-fs::path Resolved(const std::string& path) {
-  std::error_code ec;
-  fs::path resolved = fs::weakly_canonical(fs::absolute(path), ec);
-  if (ec) resolved = fs::absolute(path).lexically_normal();
-  return resolved;
-}
-
 // Refuses an output folder that RunFit must not replace as a whole; true when
-// it holds an earlier run (to be replaced).
+// it holds an earlier run (to be replaced). Inputs are compared by resolved
+// path and by device and inode (core/atomic_file.h IsInsideFolder, SameFile),
+// so a hard link, bind mount or symbolic link does not hide one.
 bool CheckOutputFolder(const RunFitOptions& options) {
   const std::string& out_name = options.output_dir;
-  const fs::path out = Resolved(out_name);
   const char* why = ": samp fit replaces its output folder as a whole at the end of the run";
-  auto refuse_input = [&](const std::string& what, const std::string& path) {
-    SAMP_CHECK(path.empty() || !IsWithin(Resolved(path), out))
+  std::vector<std::pair<std::string, std::string>> inputs;  // what, path
+  for (const std::string& seq : options.sequences) inputs.emplace_back("sequence", seq);
+  for (const std::string& labels : options.tracking_labels) inputs.emplace_back("tracking label file", labels);
+  if (!options.link_only) inputs.emplace_back("model", options.model_path);
+  for (const auto& [what, path] : inputs) {
+    SAMP_CHECK(path.empty() || !IsInsideFolder(path, out_name))
         << "output folder " << out_name << " holds the input " << what << " " << path << why
         << "; give an output folder outside the inputs";
-  };
-  for (const std::string& seq : options.sequences) refuse_input("sequence", seq);
-  for (const std::string& labels : options.tracking_labels) refuse_input("tracking label file", labels);
-  if (!options.link_only) refuse_input("model", options.model_path);
+  }
   std::error_code ec;
   const fs::path cwd = fs::current_path(ec);
-  SAMP_CHECK(ec || !IsWithin(cwd.lexically_normal(), out))
+  SAMP_CHECK(ec || !IsInsideFolder(cwd.string(), out_name))
       << "output folder " << out_name << " is the current folder or holds it" << why
       << "; give another folder";
-  const fs::file_status status = fs::status(out, ec);
-  if (!fs::exists(status)) return false;
-  SAMP_CHECK(fs::is_directory(status)) << "output folder " << out_name << " exists and is not a folder";
-  const bool empty = fs::is_empty(out, ec);
-  SAMP_CHECK(!ec) << "cannot list output folder " << out_name << ": " << ec.message();
-  SAMP_CHECK(empty || (fs::is_regular_file(out / "tracks.json", ec) && fs::is_regular_file(out / "config.json", ec)))
-      << "output folder " << out_name << " is not empty and not the output of a samp fit (it has no "
-      << "tracks.json and config.json)" << why << ", and replaces only its own; give a new or empty folder";
-  return !empty;
+  const bool earlier_run = CheckReplaceableOutputFolder(out_name, why);
+  if (earlier_run) {
+    // A file of the earlier run that is an input under another name (a hard link).
+    for (fs::recursive_directory_iterator it(out_name, ec), end; !ec && it != end; it.increment(ec)) {
+      for (const auto& [what, path] : inputs) {
+        SAMP_CHECK(path.empty() || !SameFile(it->path().string(), path))
+            << "output folder " << out_name << " holds the input " << what << " " << path << " as "
+            << it->path().string() << why << "; give an output folder outside the inputs";
+      }
+    }
+  }
+  return earlier_run;
 }
 
 // Refuses two sequences whose outputs would have the same name.
@@ -122,8 +116,7 @@ void CheckSequenceNames(const RunFitOptions& options) {
 }
 
 std::string MeshPrefix(const RunFitOptions& options, const std::string& seq, int track_id) {
-  const std::string dir = options.sequences.size() > 1 ? "meshes/" + seq + "/" : "meshes/";
-  return dir + "track_" + std::to_string(track_id);
+  return FitMeshStem(seq, track_id, options.sequences.size() > 1);
 }
 
 // Writes FOLDER/label_02/<seq>.txt, the labels by frame and then track id; a
@@ -133,7 +126,7 @@ void WriteSequenceLabels(const std::string& folder, std::vector<ObjectLabel> lab
     return a.frame != b.frame ? a.frame < b.frame : a.track_id < b.track_id;
   });
   try {
-    WriteTrackingLabels((fs::path(folder) / "label_02" / (result->name + ".txt")).string(), labels);
+    WriteTrackingLabels(FitLabelsPath(folder, result->name), labels);
   } catch (const std::exception& e) {
     result->ok = false;
     result->error = std::string("writing labels: ") + e.what();
@@ -228,6 +221,62 @@ void FitSequence(const RunFitOptions& options, const std::string& folder, const 
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
+// The detections and ego poses of a sequence's frames (in the options' frame
+// range), for self-calibration.
+std::vector<FrameDetections> ReadSequenceDetections(const std::string& directory, const SequenceOptions& options) {
+  const SequenceReader reader(directory, options);
+  std::vector<FrameDetections> frames;
+  for (int i = 0; i < reader.num_frames(); ++i) {
+    const int frame = reader.files().frames[i].frame;
+    if ((options.first_frame >= 0 && frame < options.first_frame) ||
+        (options.last_frame >= 0 && frame > options.last_frame))
+      continue;
+    FrameDetections fd;
+    fd.frame = frame;
+    fd.world_from_camera = reader.WorldFromCamera(frame);
+    fd.detections = reader.ReadDetections(i);
+    frames.push_back(std::move(fd));
+  }
+  return frames;
+}
+
+// Self-calibration or a detector model file: the options the run links and
+// fits with (the tracker's sigmas, the fit's detection size sigma), and the
+// model in the summary. Sequences that cannot be read or come with tracking
+// labels do not take part (they fail or are linked later as before).
+RunFitOptions CalibratedOptions(const RunFitOptions& options, RunFitSummary* summary) {
+  RunFitOptions effective = options;
+  if (!options.self_calibrate && options.detector_model_path.empty()) return effective;
+  if (!options.detector_model_path.empty()) {
+    summary->detector_model = ReadDetectorNoiseModel(options.detector_model_path);
+    summary->calibration_report = "read from " + options.detector_model_path + ": " +
+                                  summary->detector_model.BriefReport();
+    effective.sequence.tracker = TrackerForModel(options.sequence.tracker, summary->detector_model,
+                                                 options.calibration.tracker_sigma_scale);
+  } else {
+    std::vector<std::vector<FrameDetections>> frames;
+    for (size_t i = 0; i < options.sequences.size(); ++i) {
+      if (!options.tracking_labels.empty()) continue;
+      try {
+        frames.push_back(ReadSequenceDetections(options.sequences[i], options.sequence));
+      } catch (const std::exception& e) {
+        LogWarning() << "self-calibration: sequence " << options.sequences[i] << " left out: " << e.what();
+      }
+    }
+    const CalibrationResult calibration = CalibrateTracker(frames, options.sequence.tracker, options.calibration);
+    summary->detector_model = calibration.model;
+    summary->calibration_report = calibration.BriefReport();
+    effective.sequence.tracker = calibration.tracker;
+    for (const std::string& note : calibration.model.notes)
+      LogWarning() << "self-calibration: " << note << " (docs/detector_calibration.md)";
+  }
+  summary->detector_model_used = true;
+  if (options.fit.detection_size_sigma > 0)
+    effective.fit.detection_size_sigma = summary->detector_model.MeanSizeSigma();
+  LogInfo() << summary->calibration_report;
+  return effective;
+}
+
 }  // namespace
 
 std::string SequenceOutputName(const std::string& directory) {
@@ -249,11 +298,15 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   options.Check();
   CheckSequenceNames(options);
   const bool earlier_run = CheckOutputFolder(options);
+  RunFitSummary summary;
+  // The options the sequences are linked and fitted with (the detector's
+  // sigmas calibrated when asked); `options` is what config.json records.
+  const RunFitOptions effective = CalibratedOptions(options, &summary);
   std::unique_ptr<ShapeModel> model;
   std::unique_ptr<TrackFitter> fitter;
   if (!options.link_only) {
     model = std::make_unique<ShapeModel>(ShapeModel::Load(options.model_path));
-    fitter = std::make_unique<TrackFitter>(*model, options.fit);
+    fitter = std::make_unique<TrackFitter>(*model, effective.fit);
   }
   // Every file goes into `staged`, which replaces output_dir at the end.
   StagedFolder staged(options.output_dir);
@@ -269,10 +322,9 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   std::vector<SequenceWork> work(options.sequences.size());
   tbb::task_arena arena(options.num_threads > 0 ? options.num_threads : tbb::task_arena::automatic);
   arena.execute([&] {
-    tbb::parallel_for(size_t(0), work.size(), [&](size_t i) { FitSequence(options, folder, fitter.get(), i, &work[i]); });
+    tbb::parallel_for(size_t(0), work.size(), [&](size_t i) { FitSequence(effective, folder, fitter.get(), i, &work[i]); });
   });
 
-  RunFitSummary summary;
   TracksFile tracks_file;
   tracks_file.model = options.model_path;
   for (SequenceWork& w : work) {
@@ -293,18 +345,24 @@ RunFitSummary RunFit(const RunFitOptions& options) {
     sequence.failed_tracks = r.track_failures;
     tracks_file.sequences.push_back(std::move(sequence));
   }
-  WriteTracksFile((fs::path(folder) / "tracks.json").string(), tracks_file);
+  WriteTracksFile(FitTracksPath(folder), tracks_file);
 
   FitConfig config;
   config.options = options;
   config.model_components = model ? model->NumComponents() : 0;
   WriteFitConfig((fs::path(folder) / "config.json").string(), config);
+  if (summary.detector_model_used)
+    WriteDetectorNoiseModel((fs::path(folder) / "detector_model.json").string(), summary.detector_model);
 
   int num_detections = 0;
   for (const auto& q : summary.sequences) num_detections += q.input.tracking.num_detections;
   std::ostringstream failure;
   if (summary.num_sequences_failed == int(summary.sequences.size())) {
     failure << "every sequence failed";
+  } else if (summary.num_sequences_failed > 0) {
+    failure << summary.num_sequences_failed << " of " << summary.sequences.size() << " sequences failed:";
+    for (const auto& q : summary.sequences)
+      if (!q.ok) failure << " " << q.directory;
   } else if (!options.link_only && summary.num_tracks_fitted == 0 && num_detections > 0) {
     failure << "no track was fitted although the input had " << num_detections << " detection(s)";
     if (summary.num_tracks_failed > 0) failure << "; every track failed (" << summary.num_tracks_failed << ")";
@@ -312,6 +370,14 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   }
   summary.failure = failure.str();
   if (summary.failure.empty() && options.before_commit) options.before_commit(folder);
+  if (!summary.failure.empty() && earlier_run) {
+    // A failed run never replaces a good one: the earlier output stays.
+    summary.kept_previous_output = true;
+    LogWarning() << "the run failed (" << summary.failure << "): " << options.output_dir
+                 << " keeps the output of the earlier run";
+    summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return summary;
+  }
   staged.Commit();
   summary.replaced_previous_output = earlier_run && staged.replaced();
   if (summary.replaced_previous_output) LogInfo() << "replaced " << options.output_dir << ", the output of an earlier run";

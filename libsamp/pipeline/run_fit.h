@@ -10,15 +10,18 @@
 // is reported in the summary and skipped, the others complete. A failed
 // sequence writes no label file.
 //
-// OUT is written completely or not at all (core/atomic_file.h StagedFolder):
+// OUT is written completely or not at all (core/atomic_file.h StagedFolder;
+// a failed run, RunFitSummary::failure, never replaces an earlier output):
 // every file goes into a temporary folder beside OUT, which replaces OUT as a
 // whole at the end, so no file of an earlier run (label_02/, meshes/,
 // pictures/, index.html) survives into a new one. A run that throws (bad
 // options, a model that does not load, a write error) or is interrupted leaves
 // OUT as it was. OUT may be a new or empty folder or the output of an earlier
-// `samp fit` (it has tracks.json and config.json); any other folder, a file,
-// a folder that holds an input (a --seq, --tracks or model file) or the
-// current folder is refused before anything is read. Two sequences whose
+// samp run (its marker file .samp_run lists every file in it:
+// CheckReplaceableOutputFolder); any other folder (the foreign files are
+// listed), a file, a folder that holds an input (a --seq, --tracks or model
+// file; by path and by device and inode) or the current folder is refused
+// before anything is read. Two sequences whose
 // outputs would share a name (label_02/<seq>.txt) are refused too.
 #pragma once
 
@@ -26,8 +29,9 @@
 #include <string>
 #include <vector>
 
-#include "libsamp/fit/fitter.h"
+#include "libsamp/data/detector_noise.h"
 #include "libsamp/data/sequence.h"
+#include "libsamp/fit/fitter.h"
 
 namespace samp {
 
@@ -57,6 +61,18 @@ struct RunFitOptions {
   // is part of the output (`samp fit --pictures --html`). If it throws,
   // output_dir stays as it was. Not written to config.json.
   std::function<void(const std::string& folder)> before_commit;
+  // Detector self-calibration (docs/detector_calibration.md): link every
+  // sequence with robust cues, estimate the detector's noise model from the
+  // tracks of all sequences (pooled), re-link with it to a fixed point, then
+  // link and fit with the estimate: the tracker's sigmas and the fit's
+  // detection size sigma (unless 0 = off) and position covariance come from
+  // it. The estimate goes to OUT/detector_model.json and the summary.
+  bool self_calibrate = false;
+  CalibrationOptions calibration;
+  // A detector model file (`samp calibrate-detector`, data/detector_noise.h)
+  // used instead of the tracker's and the fit's detector sigmas; excludes
+  // self_calibrate.
+  std::string detector_model_path;
 
   // Throws samp::Error naming the field and the rule it broke.
   void Check() const;
@@ -79,11 +95,18 @@ struct RunFitSummary {
   int num_sequences_failed = 0;
   int num_tracks_fitted = 0;
   int num_tracks_failed = 0;
-  // Why the run as a whole failed (`samp fit` then exits 1): every sequence
-  // failed, or no track was fitted although the input had detections (every
-  // track failed or was dropped). Empty otherwise. The output is still written.
+  // Why the run failed (`samp fit` then exits 1): a sequence failed (one of a
+  // batch is enough), or no track was fitted although the input had
+  // detections (every track failed or was dropped). Empty otherwise. A failed
+  // run is written into a new or empty output folder (its tracks.json says
+  // why) but never replaces an earlier run's output (kept_previous_output).
   std::string failure;
   bool replaced_previous_output = false;  // output_dir held an earlier run, now replaced
+  bool kept_previous_output = false;      // the run failed and output_dir keeps the earlier run
+  // The detector model the run used (self-calibrated or read), when any.
+  bool detector_model_used = false;
+  DetectorNoiseModel detector_model;
+  std::string calibration_report;  // CalibrationResult::BriefReport, or where the model was read
   double seconds = 0.0;
   std::string BriefReport() const;
 };

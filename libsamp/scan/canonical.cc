@@ -1,3 +1,4 @@
+#include "libsamp/core/json_text.h"
 #include "libsamp/scan/canonical.h"
 
 #include <algorithm>
@@ -224,14 +225,14 @@ class ManifestParser {
   }
 
   double PositiveNumber(const Json& value, const std::string& field) const {
-    if (!value.is_number()) Fail(field, "expected a number, got " + value.dump());
+    if (!value.is_number()) Fail(field, "expected a number, got " + DumpJson(value));
     const double number = value.get<double>();
     if (!(std::isfinite(number) && number > 0)) Fail(field, "expected a positive number");
     return number;
   }
 
   std::string String(const Json& value, const std::string& field) const {
-    if (!value.is_string()) Fail(field, "expected a string, got " + value.dump());
+    if (!value.is_string()) Fail(field, "expected a string, got " + DumpJson(value));
     return value.get<std::string>();
   }
 
@@ -246,11 +247,11 @@ class ManifestParser {
 
   Eigen::Vector3d Vector3(const Json& value, const std::string& field) const {
     if (!value.is_array() || value.size() != 3) {
-      Fail(field, "expected an array of 3 numbers [length, height, width], got " + value.dump());
+      Fail(field, "expected an array of 3 numbers [length, height, width], got " + DumpJson(value));
     }
     Eigen::Vector3d v;
     for (int i = 0; i < 3; ++i) {
-      if (!value[i].is_number()) Fail(field, "expected numbers, got " + value.dump());
+      if (!value[i].is_number()) Fail(field, "expected numbers, got " + DumpJson(value));
       v[i] = value[i].get<double>();
     }
     return v;
@@ -283,7 +284,7 @@ class ManifestParser {
       options->add_wheels = wheels == "synthesise";
     } else if (key == "ground_clearance") {
       if (!value.is_number() || !(value.get<double>() >= 0.0) || !std::isfinite(value.get<double>())) {
-        Fail(field, "expected a number >= 0 (metres), got " + value.dump());
+        Fail(field, "expected a number >= 0 (metres), got " + DumpJson(value));
       }
       options->wheels.ground_clearance = value.get<double>();
     } else if (key == "wheel_radius") {
@@ -367,7 +368,7 @@ class ManifestParser {
         entry.name = String(value, field);
         if (entry.name.empty()) Fail(field, "must not be empty");
       } else if (key == "skip") {
-        if (!value.is_boolean()) Fail(field, "expected true or false, got " + value.dump());
+        if (!value.is_boolean()) Fail(field, "expected true or false, got " + DumpJson(value));
         entry.skip = value.get<bool>();
       } else if (key == "skip_reason") {
         entry.skip_reason = String(value, field);

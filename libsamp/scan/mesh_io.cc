@@ -2,17 +2,25 @@
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <assimp/Exporter.hpp>
+#include <assimp/IOStream.hpp>
+#include <assimp/IOSystem.hpp>
 #include <assimp/Importer.hpp>
 #include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <cstdint>
 #include <deque>
 #include <filesystem>
+#include <memory>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 #include <system_error>
 #include <vector>
 
@@ -32,48 +40,142 @@ std::string LowerExtension(const std::string& path) {
   return extension;
 }
 
-// assimp's OFF reader allocates the vertex and face counts of the header
-// before it reads a single vertex (a header "OFF\n99999999999999 4 6" asked
-// for 49 GB under the fuzzer). Every vertex takes at least 6 bytes ("0 0 0\n")
-// and every face at least 8 ("3 0 1 2\n"), so counts the file cannot hold are
-// refused here, naming the file and the figures. A header samp cannot parse
-// is left to assimp, which refuses it.
-void CheckOffHeaderFitsTheFile(const std::string& path) {
+// Memory bounded by the input's size: assimp's OFF and PLY readers allocate
+// the element counts of the header before they read a single element (a
+// header "OFF\n99999999999999 4 6" asked for 49 GB under the fuzzer, a
+// 43-byte "OFF200000000 ..." took 2.4 GB, a binary PLY declaring 10^8
+// vertices with 100 bytes of body 1.26 GB). So samp reads these headers
+// first, by content (whatever the extension), and refuses counts the file
+// cannot hold: every element takes at least a known number of bytes.
+uint64_t SaturatingMulAdd(uint64_t sum, uint64_t count, uint64_t bytes) {
+  constexpr uint64_t kHuge = uint64_t(1) << 62;
+  if (bytes != 0 && count > kHuge / bytes) return kHuge;
+  return std::min(kHuge, sum + count * bytes);
+}
+
+// The decimal digits at `text[*i]` (at most 19 kept; more saturate).
+uint64_t DigitRun(const std::string& text, size_t* i) {
+  uint64_t value = 0;
+  int digits = 0;
+  while (*i < text.size() && text[*i] >= '0' && text[*i] <= '9') {
+    if (++digits <= 18) value = value * 10 + uint64_t(text[*i] - '0');
+    else value = uint64_t(1) << 62;
+    ++*i;
+  }
+  return value;
+}
+
+std::string ReadHead(const std::string& path, size_t bytes) {
   std::ifstream in(path, std::ios::binary);
-  std::string text(4096, '\0');
+  std::string text(bytes, '\0');
   in.read(&text[0], std::streamsize(text.size()));
   text.resize(size_t(in.gcount()));
-  std::vector<std::string> tokens;
-  for (size_t i = 0; i < text.size() && tokens.size() < 3;) {
+  return text;
+}
+
+// OFF: the keyword (OFF, COFF, NOFF, STOFF, 4OFF, nOFF, ... possibly glued to
+// the first count), then the vertex and face counts. The first three runs of
+// digits after the keyword are taken as counts, as assimp's number parser
+// reads digits up to the first other character: "200000000x" is 200000000.
+// Each vertex takes at least 6 bytes ("0 0 0\n"), each face 8 ("3 0 1 2\n").
+void CheckOffHeaderFitsTheFile(const std::string& path, const std::string& text, uint64_t file_bytes) {
+  size_t i = 0;
+  while (i < text.size()) {  // comments and space before the keyword
     const unsigned char c = static_cast<unsigned char>(text[i]);
     if (c == '#') {
       while (i < text.size() && text[i] != '\n') ++i;
     } else if (std::isspace(c)) {
       ++i;
     } else {
-      size_t end = i;
-      while (end < text.size() && !std::isspace(static_cast<unsigned char>(text[end])) && text[end] != '#') ++end;
-      tokens.push_back(text.substr(i, end - i));
-      i = end;
+      break;
     }
   }
-  if (tokens.size() < 3) return;
-  const std::string& keyword = tokens[0];
-  if (keyword.size() < 3 || keyword.compare(keyword.size() - 3, 3, "OFF") != 0) return;
-  uint64_t counts[2];
-  for (int k = 0; k < 2; ++k) {
-    const std::string& digits = tokens[size_t(k) + 1];
-    if (digits.empty() || !std::all_of(digits.begin(), digits.end(), [](char d) { return d >= '0' && d <= '9'; })) return;
-    // More than 15 digits is beyond any file; saturate instead of overflowing.
-    counts[k] = digits.size() > 15 ? uint64_t(1) << 60 : std::stoull(digits);
+  const size_t keyword = text.find("OFF", i);
+  if (keyword == std::string::npos || keyword > i + 4) return;  // not an OFF file
+  uint64_t counts[3] = {0, 0, 0};
+  int found = 0;
+  for (size_t k = keyword + 3; k < text.size() && found < 3;) {
+    if (text[k] == '#') {
+      while (k < text.size() && text[k] != '\n') ++k;
+    } else if (text[k] >= '0' && text[k] <= '9') {
+      counts[found++] = DigitRun(text, &k);
+    } else {
+      ++k;
+    }
   }
+  const uint64_t needed = SaturatingMulAdd(SaturatingMulAdd(0, counts[0], 6), counts[1], 8);
+  SAMP_CHECK(needed <= file_bytes && counts[2] <= file_bytes)
+      << "cannot read mesh '" << path << "': its OFF header announces " << counts[0] << " vertices and "
+      << counts[1] << " faces, at least " << needed << " bytes, but the file has " << file_bytes;
+}
+
+// PLY: "element NAME COUNT" and its "property TYPE NAME" / "property list
+// COUNT_TYPE INDEX_TYPE NAME" lines up to "end_header". A binary element
+// takes at least the sum of its scalar sizes plus each list's count size; an
+// ASCII one 2 bytes per property (a digit and a separator). A count that is
+// not a number, or a header without end_header in its first 64 KiB, is an
+// error here (assimp would guess).
+void CheckPlyHeaderFitsTheFile(const std::string& path, const std::string& text, uint64_t file_bytes) {
+  if (text.compare(0, 3, "ply") != 0) return;
+  const size_t end = text.find("end_header");
+  SAMP_CHECK(end != std::string::npos)
+      << "cannot read mesh '" << path << "': PLY header without end_header in its first " << text.size() << " bytes";
+  std::istringstream lines(text.substr(0, end));
+  bool binary = false;
+  uint64_t needed = 0, count = 0, element_bytes = 0;
+  auto finish_element = [&] { needed = SaturatingMulAdd(needed, count, std::max<uint64_t>(element_bytes, 1)); };
+  auto scalar_bytes = [&](const std::string& type) -> uint64_t {
+    if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+    if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+    if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" ||
+        type == "float32")
+      return 4;
+    if (type == "double" || type == "float64") return 8;
+    SAMP_THROW() << "cannot read mesh '" << path << "': PLY property type '" << type << "' is not a PLY type";
+  };
+  for (std::string line; std::getline(lines, line);) {
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "format") {
+      std::string format;
+      words >> format;
+      binary = format.rfind("binary", 0) == 0;
+    } else if (keyword == "element") {
+      finish_element();
+      std::string name, number;
+      words >> name >> number;
+      SAMP_CHECK(!number.empty() && std::all_of(number.begin(), number.end(), [](char d) { return d >= '0' && d <= '9'; }))
+          << "cannot read mesh '" << path << "': PLY element '" << name << "' has count '" << number
+          << "', not a number";
+      size_t at = 0;
+      count = DigitRun(number, &at);
+      element_bytes = 0;
+    } else if (keyword == "property") {
+      std::string type;
+      words >> type;
+      if (type == "list") {
+        std::string count_type;
+        words >> count_type;
+        element_bytes += binary ? scalar_bytes(count_type) : 2;
+      } else {
+        element_bytes += binary ? scalar_bytes(type) : 2;
+      }
+    }
+  }
+  finish_element();
+  const uint64_t body = file_bytes - std::min<uint64_t>(file_bytes, end + 10);
+  SAMP_CHECK(needed <= body) << "cannot read mesh '" << path << "': its PLY header announces elements of at least "
+                             << needed << " bytes, but the file has " << body << " after its header";
+}
+
+void CheckHeaderCountsFitTheFile(const std::string& path) {
   std::error_code ec;
   const uint64_t file_bytes = fs::file_size(path, ec);
   if (ec) return;
-  const uint64_t needed = 6 * counts[0] + 8 * counts[1];
-  SAMP_CHECK(needed <= file_bytes) << "cannot read mesh '" << path << "': its OFF header announces "
-                                   << tokens[1] << " vertices and " << tokens[2] << " faces, at least "
-                                   << needed << " bytes, but the file has " << file_bytes;
+  const std::string text = ReadHead(path, 65536);
+  CheckOffHeaderFitsTheFile(path, text, file_bytes);
+  CheckPlyHeaderFitsTheFile(path, text, file_bytes);
 }
 
 // Appends the triangles of every mesh referenced by `node` and its children,
@@ -101,6 +203,73 @@ void FlattenNode(const aiScene& scene, const aiNode& node, const aiMatrix4x4& pa
     FlattenNode(scene, *node.mChildren[c], transform, out);
   }
 }
+
+// File output for assimp's exporters that checks every write: assimp's own
+// file streams ignore what fwrite/fclose return, so a full disk left a
+// truncated or empty mesh behind. The first failure (file and OS error) is
+// kept in `*error`; writes after it are refused. Each file is flushed to the
+// disk (fsync) when it is closed.
+class CheckedFileStream : public Assimp::IOStream {
+ public:
+  CheckedFileStream(std::FILE* file, std::string path, std::shared_ptr<std::string> error)
+      : file_(file), path_(std::move(path)), error_(std::move(error)) {}
+  ~CheckedFileStream() override {
+    if (std::fflush(file_) != 0) Fail("write to");
+    if (::fsync(::fileno(file_)) != 0) Fail("fsync of");
+    if (std::fclose(file_) != 0) Fail("close of");
+  }
+  size_t Read(void* buffer, size_t size, size_t count) override { return std::fread(buffer, size, count, file_); }
+  size_t Write(const void* buffer, size_t size, size_t count) override {
+    if (!error_->empty()) return 0;
+    const size_t written = std::fwrite(buffer, size, count, file_);
+    if (written != count) Fail("write to");
+    return written;
+  }
+  aiReturn Seek(size_t offset, aiOrigin origin) override {
+    const int whence = origin == aiOrigin_SET ? SEEK_SET : origin == aiOrigin_CUR ? SEEK_CUR : SEEK_END;
+    return std::fseek(file_, long(offset), whence) == 0 ? aiReturn_SUCCESS : aiReturn_FAILURE;
+  }
+  size_t Tell() const override { return size_t(std::ftell(file_)); }
+  size_t FileSize() const override {
+    std::error_code ec;
+    const uintmax_t size = fs::file_size(path_, ec);
+    return ec ? 0 : size_t(size);
+  }
+  void Flush() override {
+    if (std::fflush(file_) != 0) Fail("write to");
+  }
+
+ private:
+  void Fail(const char* step) {
+    if (error_->empty()) *error_ = std::string(step) + " " + path_ + " failed: " + std::strerror(errno ? errno : EIO);
+  }
+  std::FILE* file_;
+  std::string path_;
+  std::shared_ptr<std::string> error_;
+};
+
+class CheckedFileSystem : public Assimp::IOSystem {
+ public:
+  explicit CheckedFileSystem(std::shared_ptr<std::string> error) : error_(std::move(error)) {}
+  bool Exists(const char* path) const override {
+    std::error_code ec;
+    return fs::exists(path, ec);
+  }
+  char getOsSeparator() const override { return '/'; }
+  Assimp::IOStream* Open(const char* path, const char* mode) override {
+    std::FILE* file = std::fopen(path, mode);
+    if (file == nullptr) {
+      if (error_->empty() && std::strchr(mode, 'w') != nullptr)
+        *error_ = std::string("cannot create ") + path + ": " + std::strerror(errno);
+      return nullptr;
+    }
+    return new CheckedFileStream(file, path, error_);
+  }
+  void Close(Assimp::IOStream* stream) override { delete stream; }
+
+ private:
+  std::shared_ptr<std::string> error_;
+};
 
 // The assimp exporter id for an output extension.
 std::string ExportFormatId(const std::string& path) {
@@ -167,7 +336,7 @@ Mesh LoadMesh(const std::string& path) {
   std::error_code ec;
   SAMP_CHECK(fs::is_regular_file(path, ec)) << "cannot read mesh '" << path << "': no such file";
   if (LowerExtension(path) == ".json") return ReadApolloCarJson(path);
-  if (LowerExtension(path) == ".off") CheckOffHeaderFitsTheFile(path);
+  CheckHeaderCountsFitTheFile(path);
   Assimp::Importer importer;
   // Drop lines and points entirely; keep only triangles after triangulation.
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
@@ -299,7 +468,11 @@ void ExportMesh(const std::string& path, const Mesh& mesh) {
     } cleanup{folder};
     const fs::path main_file = folder / target.filename();
     Assimp::Exporter exporter;
-    if (exporter.Export(&scene, format, main_file.string()) != AI_SUCCESS) {
+    const auto write_error = std::make_shared<std::string>();
+    exporter.SetIOHandler(new CheckedFileSystem(write_error));  // owned by the exporter
+    const aiReturn exported = exporter.Export(&scene, format, main_file.string());
+    SAMP_CHECK(write_error->empty()) << "cannot write '" << path << "': " << *write_error;
+    if (exported != AI_SUCCESS) {
       SAMP_THROW() << "cannot export mesh to '" << path << "': " << exporter.GetErrorString();
     }
     SAMP_CHECK(fs::exists(main_file)) << "cannot export mesh to '" << path

@@ -449,34 +449,38 @@ std::vector<DenseGrid> ReadVdbImpl(const std::string& path, GridSpec* spec, VdbM
   return out;
 }
 
-// Fills in the size and checksum of a file OpenVDB has just written
-// (their placeholders have the final length, so no offset moves).
-void SealPayload(const std::string& temporary, const std::string& path) {
-  std::string bytes;
-  {
-    std::ifstream in(temporary, std::ios::binary);
-    SAMP_CHECK(in) << "cannot write " << path << ": cannot reopen " << temporary;
-    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-  }
-  const VdbPrelude prelude = ReadPrelude(bytes, temporary);
+// Fills in the size and checksum of a file OpenVDB has just written into
+// `bytes` (their placeholders have the final length, so no offset moves).
+// `path` names the file in errors.
+void SealBytes(std::string* bytes, const std::string& path) {
+  const VdbPrelude prelude = ReadPrelude(*bytes, path);
   const auto size_it = prelude.file_meta.find(kFileBytesKey);
   const auto checksum_it = prelude.file_meta.find(kFileChecksumKey);
   SAMP_CHECK(size_it != prelude.file_meta.end() && checksum_it != prelude.file_meta.end())
       << "cannot write " << path << ": checksum placeholders missing";
-  const std::string size_text = Decimal20(bytes.size());
+  const std::string size_text = Decimal20(bytes->size());
   const std::string checksum_text =
-      Hex64(FileChecksum(bytes, prelude.file_meta, {kFileBytesKey, kFileChecksumKey}));
+      Hex64(FileChecksum(*bytes, prelude.file_meta, {kFileBytesKey, kFileChecksumKey}));
   SAMP_CHECK(size_it->second.value.size() == size_text.size() &&
              checksum_it->second.value.size() == checksum_text.size())
       << "cannot write " << path << ": checksum placeholders have the wrong length";
-  std::fstream out(temporary, std::ios::binary | std::ios::in | std::ios::out);
-  out.seekp(std::streamoff(size_it->second.value_offset));
-  out.write(size_text.data(), std::streamsize(size_text.size()));
-  out.seekp(std::streamoff(checksum_it->second.value_offset));
-  out.write(checksum_text.data(), std::streamsize(checksum_text.size()));
-  out.close();
-  SAMP_CHECK(out) << "cannot write " << path << ": error sealing " << temporary;
+  bytes->replace(size_t(size_it->second.value_offset), size_text.size(), size_text);
+  bytes->replace(size_t(checksum_it->second.value_offset), checksum_text.size(), checksum_text);
 }
+
+// OpenVDB's archive writer into memory: the bytes io::File writes (the same
+// Archive::write with seekable = true, offsets counted from 0), but samp
+// writes them to the disk itself, checking every write (io::File does not
+// report a full disk: it left a truncated file behind).
+class MemoryArchive : public openvdb::io::Archive {
+ public:
+  std::string Write(const openvdb::GridPtrVec& grids, const openvdb::MetaMap& meta) const {
+    std::ostringstream out(std::ios::binary);
+    Archive::write(out, grids, /*seekable=*/true, meta);
+    SAMP_CHECK(out) << "OpenVDB's writer failed";
+    return out.str();
+  }
+};
 
 }  // namespace
 
@@ -533,17 +537,31 @@ void WriteVdbImpl(const std::string& path, const GridSpec& spec,
   file_meta.insertMeta(kFileBytesKey, openvdb::StringMetadata(Decimal20(0)));
   file_meta.insertMeta(kFileChecksumKey, openvdb::StringMetadata(Hex64(0)));
 
-  WriteFileAtomically(path, [&](const std::string& temporary) {
+  std::string bytes;
+  try {
+    MemoryArchive archive;
+    archive.setCompression(compression);
+    bytes = archive.Write(vdb_grids, file_meta);
+  } catch (const openvdb::Exception& e) {
+    SAMP_THROW() << "cannot write " << path << ": " << e.what();
+  } catch (const std::exception& e) {
+    SAMP_THROW() << "cannot write " << path << ": " << e.what();
+  }
+  // Size and checksum of exactly these bytes; every one of them is written
+  // and checked, then the file is read back and verified before it replaces
+  // `path`.
+  SealBytes(&bytes, path);
+  WriteBytesAtomically(path, bytes, [&](const std::string& temporary) {
+    VdbReadOptions verify;
+    verify.max_dense_bytes = std::max<int64_t>(
+        verify.max_dense_bytes, int64_t(grids.size()) * spec.NumVoxels() * int64_t(sizeof(float)));
+    verify.max_expansion = 1e15;  // the writer knows its grids: a constant grid compresses very well
     try {
-      openvdb::io::File file(temporary);
-      file.setCompression(compression);
-      file.write(vdb_grids, file_meta);
-      file.close();
-      SealPayload(temporary, path);
-    } catch (const openvdb::Exception& e) {
-      SAMP_THROW() << "cannot write " << path << ": " << e.what();
+      SAMP_CHECK(ReadWholeFile(temporary, verify) == bytes) << "its bytes differ from those written";
+      ReadVdbImpl(temporary, nullptr, nullptr, verify);
     } catch (const std::exception& e) {
-      SAMP_THROW() << "cannot write " << path << ": " << e.what();
+      SAMP_THROW() << "cannot write " << path << ": the written file " << temporary
+                   << " does not read back: " << e.what();
     }
   });
 }
@@ -568,7 +586,11 @@ void WriteVdbForTesting(const std::string& path, const GridSpec& spec,
   WriteVdbImpl(path, spec, grids, metadata, background, codec | openvdb::io::COMPRESS_ACTIVE_MASK);
 }
 
-void ResealVdbForTesting(const std::string& path) { SealPayload(path, path); }
+void ResealVdbForTesting(const std::string& path) {
+  std::string bytes = ReadWholeFile(path, VdbReadOptions());
+  SealBytes(&bytes, path);
+  WriteBytesChecked(path, bytes);
+}
 
 std::vector<VdbPayloadLayout> VdbPayloadLayoutForTesting(const std::string& path) {
   std::vector<VdbPayloadLayout> layouts;

@@ -770,6 +770,11 @@ FitVisualsSummary WriteFitVisuals(const FitVisualsOptions& options) {
     WriteTextFileAtomically(summary.html, page);
     summary.html_bytes = page.size();
   }
+  // Files added to an earlier samp output folder are samp's: its marker lists
+  // them, so the next `samp fit` into it may still replace it.
+  std::vector<std::string> written = summary.pictures;
+  if (!summary.html.empty()) written.push_back(summary.html);
+  RecordInOutputFolder(options.output_dir, written);
   summary.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return summary;
 }

@@ -1,3 +1,4 @@
+#include "libsamp/core/json_text.h"
 #include "libsamp/viz/html_viewer.h"
 
 #include <nlohmann/json.hpp>
@@ -48,7 +49,7 @@ std::string Page(const std::string& title, const Json& data, const std::vector<s
   SAMP_CHECK(HtmlViewerAvailable())
       << "this samp was built without three.js: install Debian's libjs-three (tools/install_deps.sh) and "
          "rebuild to write HTML viewers";
-  std::string json = data.dump();
+  std::string json = DumpJson(data);
   // Inside <script> "</" would end the element; "<\/" is the same JSON string.
   for (size_t i = 0; (i = json.find("</", i)) != std::string::npos; i += 3) json.replace(i, 2, "<\\/");
   std::string escaped_title;

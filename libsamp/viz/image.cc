@@ -59,15 +59,17 @@ void WritePng(const std::string& path, const RgbImage& image) {
   SAMP_CHECK(!image.Empty()) << "cannot write " << path << ": empty image";
   cv::Mat bgr;
   cv::cvtColor(AsMat(image), bgr, cv::COLOR_RGB2BGR);
-  WriteFileAtomically(path, [&](const std::string& temporary) {
-    bool ok = false;
-    try {
-      ok = cv::imwrite(temporary, bgr, {cv::IMWRITE_PNG_COMPRESSION, 6});
-    } catch (const cv::Exception& e) {
-      SAMP_THROW() << "cannot write " << path << ": " << e.what();
-    }
-    SAMP_CHECK(ok) << "cannot write " << path << " (OpenCV could not encode or write it)";
-  });
+  // Encoded in memory, then written with every byte checked (cv::imwrite
+  // does not report a full disk).
+  std::vector<uchar> buffer;
+  bool ok = false;
+  try {
+    ok = cv::imencode(".png", bgr, buffer, {cv::IMWRITE_PNG_COMPRESSION, 6});
+  } catch (const cv::Exception& e) {
+    SAMP_THROW() << "cannot write " << path << ": " << e.what();
+  }
+  SAMP_CHECK(ok) << "cannot write " << path << " (OpenCV could not encode it)";
+  WriteBytesAtomically(path, std::string(reinterpret_cast<const char*>(buffer.data()), buffer.size()));
 }
 
 RgbImage ReadPng(const std::string& path) {

@@ -30,10 +30,9 @@
 #include "libsamp/core/log.h"
 #include "libsamp/data/tracking.h"
 #include "libsamp/fit/fitter.h"
-#include "libsamp/fit/ground_cost.h"
-#include "libsamp/fit/motion_cost.h"
-#include "libsamp/fit/sdf_cost.h"
-#include "libsamp/fit/shape_prior_cost.h"
+#include "libsamp/fit/costs/ground.h"
+#include "libsamp/fit/costs/motion.h"
+#include "libsamp/fit/costs/shape_prior.h"
 #include "tests/fit/fit_test_util.h"
 
 namespace samp {

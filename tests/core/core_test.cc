@@ -4,6 +4,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -15,6 +17,7 @@
 #include "libsamp/core/mesh.h"
 #include "libsamp/core/ply_io.h"
 #include "libsamp/core/progress.h"
+#include "tests/testing/small_disk.h"
 
 namespace samp {
 namespace {
@@ -121,6 +124,63 @@ std::string ReadText(const fs::path& path) {
   return text.str();
 }
 
+// A full disk: the write fails with the target's name and the OS error, the
+// previous file stays byte-identical and no temporary is left behind
+// (docs/reliability.md, "Full disks"). Needs root for the small tmpfs.
+TEST(AtomicFile, FullDiskLeavesThePreviousFileAndNamesTheError) {
+  test::SmallDisk disk("atomic", 64 << 10);
+  if (!disk.mounted()) GTEST_SKIP() << disk.reason();
+  const std::string target = disk.path() + "/result.txt";
+  WriteTextFileAtomically(target, "the good result\n");
+  const std::string big(256 << 10, 'x');
+  try {
+    WriteTextFileAtomically(target, big);
+    ADD_FAILURE() << "a 256 KiB write onto a 64 KiB disk did not fail";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(target), std::string::npos) << message;
+    EXPECT_NE(message.find(std::strerror(ENOSPC)), std::string::npos) << message;
+  }
+  EXPECT_EQ(ReadText(target), "the good result\n");
+  // A point cloud (binary PLY, built in memory) on the full disk.
+  PointCloud cloud;
+  for (int i = 0; i < 20000; ++i) cloud.points.emplace_back(float(i), 1.f, 2.f);
+  EXPECT_THROW(WritePly(target, cloud), Error);
+  EXPECT_EQ(ReadText(target), "the good result\n");
+  // Exactly what fits is written; one byte more is refused.
+  disk.Fill(8192);
+  const size_t free_bytes = disk.FreeBytes();
+  EXPECT_THROW(WriteTextFileAtomically(target, std::string(free_bytes + 1, 'y')), Error);
+  EXPECT_EQ(ReadText(target), "the good result\n");
+  for (const auto& entry : fs::directory_iterator(disk.path())) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_TRUE(name == "result.txt" || name == "filler") << "left behind: " << name;
+  }
+}
+
+// WriteBytesChecked names the file and the OS error (here: a folder that does
+// not exist, and a device that is always full).
+TEST(AtomicFile, CheckedWriteNamesTheFileAndTheOsError) {
+  const fs::path dir = TempDir("checked");
+  try {
+    WriteBytesChecked((dir / "no" / "such" / "x").string(), "abc");
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(std::strerror(ENOENT)), std::string::npos) << e.what();
+  }
+  if (fs::exists("/dev/full")) {
+    try {
+      WriteBytesChecked("/dev/full", std::string(100, 'x'), "result.txt");
+      ADD_FAILURE() << "writing /dev/full did not fail";
+    } catch (const Error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("cannot write result.txt"), std::string::npos) << message;
+      EXPECT_NE(message.find(std::strerror(ENOSPC)), std::string::npos) << message;
+    }
+  }
+  fs::remove_all(dir);
+}
+
 // Symlinks, folders and devices are never replaced by a file.
 TEST(AtomicFile, RefusesTargetsThatAreNotRegularFiles) {
   const fs::path dir = TempDir("atomic_targets");
@@ -225,21 +285,26 @@ TEST(StagedFolder, CommitReplacesThePreviousFolderAsAWhole) {
     first.Commit();
     EXPECT_FALSE(first.replaced());
   }
-  EXPECT_EQ(Listing(target), (std::vector<std::string>{"meshes", "meshes/track_1.ply", "old.txt"}));
+  EXPECT_EQ(Listing(target), (std::vector<std::string>{".samp_run", "meshes", "meshes/track_1.ply", "old.txt"}));
   {
     StagedFolder abandoned(target.string() + "/");  // a trailing slash names the same folder
     WriteTextFileAtomically(abandoned.path() + "/new.txt", "new");
   }
-  EXPECT_EQ(Listing(target), (std::vector<std::string>{"meshes", "meshes/track_1.ply", "old.txt"}));
+  EXPECT_EQ(Listing(target), (std::vector<std::string>{".samp_run", "meshes", "meshes/track_1.ply", "old.txt"}));
   {
     StagedFolder second(target.string());
     WriteTextFileAtomically(second.path() + "/new.txt", "new");
     second.Commit();
     EXPECT_TRUE(second.replaced());
   }
-  EXPECT_EQ(Listing(target), (std::vector<std::string>{"new.txt"}));
+  EXPECT_EQ(Listing(target), (std::vector<std::string>{".samp_run", "new.txt"}));
   EXPECT_EQ(ReadText(target / "new.txt"), "new");
-  EXPECT_EQ(Listing(dir), (std::vector<std::string>{"out", "out/new.txt"}));
+  // The marker: samp's, with the run id and every file of the run.
+  const std::string marker = ReadText(target / kOutputFolderMarker);
+  EXPECT_EQ(marker.rfind("samp output folder\nrun_id ", 0), 0u) << marker;
+  EXPECT_NE(marker.find("\nfile new.txt\n"), std::string::npos) << marker;
+  EXPECT_TRUE(CheckReplaceableOutputFolder(target.string()));
+  EXPECT_EQ(Listing(dir), (std::vector<std::string>{"out", "out/.samp_run", "out/new.txt"}));
   // A symbolic link to a folder: the folder is replaced, the link stays.
   const fs::path link = dir / "link";
   fs::create_directory_symlink(target, link);
@@ -250,7 +315,74 @@ TEST(StagedFolder, CommitReplacesThePreviousFolderAsAWhole) {
     third.Commit();
   }
   EXPECT_TRUE(fs::is_symlink(link));
-  EXPECT_EQ(Listing(link.string() + "/"), (std::vector<std::string>{"third.txt"}));
+  EXPECT_EQ(Listing(link.string() + "/"), (std::vector<std::string>{".samp_run", "third.txt"}));
+  fs::remove_all(dir);
+}
+
+// Output folder names of 241-255 bytes (the longest a file system allows):
+// the temporaries beside them are cut to 255 bytes and keep the extension.
+TEST(StagedFolder, LongNamesUpToTheFileSystemLimitWork) {
+  const fs::path dir = TempDir("staged_long");
+  for (size_t length : {241u, 250u, 255u}) {
+    const std::string name(length, 'n');
+    StagedFolder staged((dir / name).string());
+    WriteTextFileAtomically(staged.path() + "/tracks.json", "{}");
+    staged.Commit();
+    EXPECT_EQ(ReadText(dir / name / "tracks.json"), "{}") << length;
+    const std::string file = std::string(length - 4, 'f') + ".txt";
+    WriteTextFileAtomically((dir / file).string(), "x");
+    EXPECT_EQ(ReadText(dir / file), "x") << length;
+    std::string seen;
+    WriteFileAtomically((dir / file).string(), [&](const std::string& temporary) {
+      seen = fs::path(temporary).filename().string();
+      WriteBytesChecked(temporary, "y");
+    });
+    EXPECT_LE(seen.size(), 255u);
+    EXPECT_EQ(fs::path(seen).extension(), ".txt") << seen;
+  }
+  fs::remove_all(dir);
+}
+
+// Which folders a run may replace: new, empty, or made by samp with nothing
+// else in them (the foreign files are listed).
+TEST(StagedFolder, ReplacesOnlyFoldersItCanProveItMade) {
+  const fs::path dir = TempDir("staged_proof");
+  EXPECT_FALSE(CheckReplaceableOutputFolder((dir / "new").string()));
+  fs::create_directories(dir / "empty");
+  EXPECT_FALSE(CheckReplaceableOutputFolder((dir / "empty").string()));
+  WriteTextFileAtomically((dir / "user" / "tracks.json").string(), "{}");
+  WriteTextFileAtomically((dir / "user" / "config.json").string(), "{}");
+  WriteTextFileAtomically((dir / "user" / "thesis.tex").string(), "t");
+  EXPECT_THROW(CheckReplaceableOutputFolder((dir / "user").string()), Error);
+  {
+    StagedFolder run((dir / "run").string());
+    WriteTextFileAtomically(run.path() + "/a/b.txt", "b");
+    run.Commit();
+    EXPECT_EQ(run.run_id().size(), 32u);
+  }
+  EXPECT_TRUE(CheckReplaceableOutputFolder((dir / "run").string()));
+  WriteTextFileAtomically((dir / "run" / "a" / "mine.txt").string(), "m");
+  WriteTextFileAtomically((dir / "run" / "notes.txt").string(), "n");
+  try {
+    CheckReplaceableOutputFolder((dir / "run").string());
+    ADD_FAILURE() << "foreign files accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("holds 2 file(s) samp did not write: a/mine.txt, notes.txt"),
+              std::string::npos)
+        << e.what();
+  }
+  // Recorded by samp (as `samp view` records its page): accepted again.
+  RecordInOutputFolder((dir / "run").string(), {(dir / "run" / "a" / "mine.txt").string(),
+                                                (dir / "run" / "notes.txt").string()});
+  EXPECT_TRUE(CheckReplaceableOutputFolder((dir / "run").string()));
+  // Inputs by path and by inode.
+  EXPECT_TRUE(IsInsideFolder((dir / "run" / "a" / "b.txt").string(), (dir / "run").string()));
+  EXPECT_FALSE(IsInsideFolder((dir / "user" / "thesis.tex").string(), (dir / "run").string()));
+  fs::create_directory_symlink(dir / "run", dir / "alias");
+  EXPECT_TRUE(IsInsideFolder((dir / "alias" / "a" / "b.txt").string(), (dir / "run").string()));
+  fs::create_hard_link(dir / "user" / "thesis.tex", dir / "hard.tex");
+  EXPECT_TRUE(SameFile((dir / "hard.tex").string(), (dir / "user" / "thesis.tex").string()));
+  EXPECT_FALSE(SameFile((dir / "hard.tex").string(), (dir / "run" / "notes.txt").string()));
   fs::remove_all(dir);
 }
 

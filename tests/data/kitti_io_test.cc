@@ -116,6 +116,13 @@ TEST_F(KittiIoTest, PlaneAndPosePlausibility) {
               {"b.txt:4:", "offset d = -20000"});
   ExpectError([&] { ReadPlane(Write("c.txt", "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1e300 0 1.65\n")); },
               {"c.txt:4:", "-1e300", "cannot be scaled to unit length"});
+  // A road 5 km below the camera, and a 53 deg tilt (issue 32).
+  ExpectError([&] { ReadPlane(Write("h.txt", "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1 0 5000\n")); },
+              {"h.txt:4:", "offset d = 5000", "not a road plane"});
+  ExpectError([&] { ReadPlane(Write("i.txt", "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -0.6018 0.7986 1.65\n")); },
+              {"i.txt:4:", "tilted 52.99", "more than 30 deg"});
+  EXPECT_NEAR(ReadPlane(Write("j.txt", "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -0.9 0.1 1.65\n"))[3], 1.65 / std::hypot(0.9, 0.1),
+              1e-12);
   // Scaled coefficients are the same plane: offset 1.65 m after scaling.
   EXPECT_NEAR(ReadPlane(Write("d.txt", "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1e5 0 1.65e5\n"))[3], 1.65, 1e-12);
   ExpectError([&] { ReadPoses(Write("e.txt", "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1e300 0 1 0 0 0 0 1 0\n")); },
@@ -126,6 +133,75 @@ TEST_F(KittiIoTest, PlaneAndPosePlausibility) {
 }
 
 const char* kDetection = "car -1 -1 -0.26 603.13 176.77 847.43 264.91 1.53 1.63 3.88 1.80 1.66 13.30 -0.13 0.999\n";
+
+// Numbers that parse but describe no car (issue 32): refused with file and
+// line; a subnormal number is a finite number.
+TEST_F(KittiIoTest, LabelPlausibility) {
+  const std::string head = "Car 0 0 0.1 ";
+  ExpectError([&] { ReadLabels(Write("r.txt", head + "600 170 -1e6 260 1.5 1.6 3.9 1.8 1.6 13 0.1\n")); },
+              {"r.txt:1:", "2D box"});
+  ExpectError([&] { ReadLabels(Write("s.txt", head + "600 170 800 260 1.5 1.6 3.9 1.8 1.6 13 1e300\n")); },
+              {"s.txt:1:", "rotation_y 1e+300"});
+  ExpectError([&] { ReadLabels(Write("t.txt", head + "600 170 800 260 1.5 1.6 3.9 1.8 50500 13 0.1\n")); },
+              {"t.txt:1:", "more than 10000 m"});
+  ExpectError([&] { ReadLabels(Write("u.txt", head + "600 170 800 260 1.5 1.6 390 1.8 1.6 13 0.1\n")); },
+              {"u.txt:1:", "more than 50 m"});
+  const std::vector<ObjectLabel> tiny =
+      ReadLabels(Write("v.txt", head + "600 170 800 260 1.5 1.6 3.9 -4e-320 1.6 13 0.1\n"));
+  ASSERT_EQ(tiny.size(), 1u);
+  EXPECT_EQ(tiny[0].position.x(), -4e-320);
+  ExpectError([&] { ReadLabels(Write("w.txt", head + "600 170 800 260 1.5 1.6 3.9 1e400 1.6 13 0.1\n")); },
+              {"w.txt:1:", "not a finite number"});
+}
+
+// PNG headers are read by samp before OpenCV decodes anything: the memory
+// budget is checked against the announced size (a 1.7 MB PNG announcing
+// 30000 x 30000 once took 1.8 GB), and every error names the file.
+TEST_F(KittiIoTest, PngHeaderAndMemoryBudget) {
+  const std::string disparity = (dir_ / "d.png").string();
+  cv::imwrite(disparity, cv::Mat(10, 20, CV_16UC1, cv::Scalar(300)));
+  const PngHeader header = ReadPngHeader(disparity);
+  EXPECT_EQ(header.width, 20);
+  EXPECT_EQ(header.height, 10);
+  EXPECT_EQ(header.channels, 1);
+  EXPECT_EQ(header.bit_depth, 16);
+  EXPECT_EQ(ReadDisparity(disparity, cv::Size(), 20 * 10 * 2).cols, 20);
+  ExpectError([&] { ReadDisparity(disparity, cv::Size(), 20 * 10 * 2 - 1); },
+              {"d.png: the disparity map's header announces 20 x 10 pixels", "memory budget of 399 bytes"});
+  // A forged header: 30000 x 30000 16-bit pixels in 33 bytes.
+  std::string forged("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR", 16);
+  for (uint32_t v : {30000u, 30000u}) {
+    for (int shift = 24; shift >= 0; shift -= 8) forged.push_back(char((v >> shift) & 0xff));
+  }
+  forged += std::string("\x10\0\0\0\0\0\0\0\0", 9);  // depth 16, gray, ..., CRC
+  const std::string big = Write("big.png", forged);
+  ExpectError([&] { ReadDisparity(big); }, {"big.png: the disparity map's header announces 30000 x 30000", "memory budget"});
+  ExpectError([&] { ReadImage(Write("text.png", "not a png"), 0, "left image"); }, {"text.png: not a PNG file"});
+  ExpectError([&] { ReadPngHeader(Write("cut.png", forged.substr(0, 20))); }, {"cut.png: PNG file cut"});
+  std::string bad_type = forged;
+  bad_type[25] = 5;
+  ExpectError([&] { ReadPngHeader(Write("type.png", bad_type)); }, {"type.png: PNG header has colour type 5"});
+  // A valid small header and a body OpenCV cannot decode.
+  std::string small = forged;
+  small[18] = small[19] = small[22] = small[23] = 0;
+  small[19] = 4;
+  small[23] = 4;
+  ExpectError([&] { ReadImage(Write("body.png", small + "garbage"), -1, "image"); }, {"body.png: "});
+}
+
+// Text files are streamed: a line over 1 MiB is an error naming the line, and
+// calibration and plane files over 1 MiB are refused.
+TEST_F(KittiIoTest, LongLinesAndHugeSmallFilesAreRefused) {
+  ExpectError([&] { ReadLabels(Write("long.txt", std::string(kDetection) + std::string(2 << 20, '1'))); },
+              {"long.txt:2: line longer than"});
+  std::string many_lines = "# Matrix\n";
+  while (many_lines.size() < (size_t(3) << 20)) many_lines += std::string(200, ' ') + "\n";
+  ExpectError([&] { ReadPlane(Write("huge_plane.txt", many_lines)); }, {"huge_plane.txt: more than 1048576 bytes"});
+  std::string poses;
+  for (int i = 0; i < 20000; ++i) poses += "1 0 0 " + std::to_string(i) + " 0 1 0 0 0 0 1 0\n";
+  EXPECT_EQ(ReadPoses(Write("poses.txt", poses + "\n\n")).size(), 20000u);
+  ExpectError([&] { ReadPoses(Write("gap.txt", poses + "\n" + poses)); }, {"gap.txt:20001: blank line inside"});
+}
 
 TEST_F(KittiIoTest, LabelsGood) {
   const std::string text = std::string(kDetection) + "\n" +
@@ -327,7 +403,7 @@ TEST_F(KittiIoTest, Disparity) {
   const std::string color = (dir_ / "color.png").string();
   cv::imwrite(color, cv::Mat(4, 6, CV_16UC3, cv::Scalar(5, 5, 5)));
   ExpectError([&] { ReadDisparity(color); }, {"color.png", "3 channel"});
-  ExpectError([&] { ReadDisparity(Write("text.png", "not a png")); }, {"text.png", "not a readable"});
+  ExpectError([&] { ReadDisparity(Write("text.png", "not a png")); }, {"text.png", "not a PNG file"});
   ExpectError([&] { ReadDisparity((dir_ / "none.png").string()); }, {"cannot open", "none.png"});
   cv::Mat too_large(2, 2, CV_32FC1, cv::Scalar(300.0f));
   EXPECT_THROW(WriteDisparity((dir_ / "big.png").string(), too_large), Error);

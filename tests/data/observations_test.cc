@@ -100,12 +100,16 @@ TEST(ObservationsTest, PointsOfABoxCar) {
   EXPECT_NEAR(total, expected, 0.01 * expected);
   ASSERT_EQ(static_cast<int>(frame.candidate_points_in_world.size()), total);
   ASSERT_EQ(frame.candidate_sigmas.size(), frame.candidate_points_in_world.size());
-  ASSERT_EQ(frame.candidate_depths.size(), frame.candidate_points_in_world.size());
+  ASSERT_EQ(frame.candidate_disparities_px.size(), frame.candidate_points_in_world.size());
+  ASSERT_EQ(frame.candidate_pixels.size(), frame.candidate_points_in_world.size());
   const double sigma = kCarZ * kCarZ * 1.0 / (c.baseline * c.camera.fx);  // 0.2567 m
   for (size_t i = 0; i < frame.candidate_points_in_world.size(); ++i) {
     const Eigen::Vector3d in_camera = pose.inverse() * frame.candidate_points_in_world[i];
     ASSERT_NEAR(in_camera.z(), kCarZ, 1e-3);  // no road, no wall
-    ASSERT_NEAR(frame.candidate_depths[i], kCarZ, 1e-3);
+    // The pixel and disparity the point was made from.
+    ASSERT_NEAR(c.baseline * c.camera.fx / frame.candidate_disparities_px[i], kCarZ, 1e-3);
+    ASSERT_NEAR(c.camera.fx * in_camera.x() / in_camera.z() + c.camera.cx, frame.candidate_pixels[i].x(), 1e-3);
+    ASSERT_NEAR(c.camera.fy * in_camera.y() / in_camera.z() + c.camera.cy, frame.candidate_pixels[i].y(), 1e-3);
     ASSERT_NEAR(frame.candidate_sigmas[i], sigma, 1e-4);
     ASSERT_GT(kRoadY - in_camera.y(), options.min_height_above_road - 1e-9);
   }
@@ -240,6 +244,49 @@ TEST(ObservationsTest, OptionsCheck) {
   options = ObservationOptions();
   options.max_points_per_frame = -1;
   test::ExpectError([&] { options.Check(); }, {"ObservationOptions.max_points_per_frame"});
+}
+
+}  // namespace
+}  // namespace samp
+
+namespace samp {
+namespace {
+
+// The one detection gate (InDetectionGate) of the candidates and the fitter:
+// a sphere, or the ray gate around it, the same in any frame.
+TEST(DetectionGate, SphereOrAlongTheRayWithinTheNoiseAtTheCentresDepth) {
+  DetectionGate gate;
+  gate.box_centre = Eigen::Vector3d(0.0, 0.9, 20.0);
+  gate.radius = 4.0;
+  const Eigen::Vector3d& c = gate.box_centre;
+  const Eigen::Vector3d behind = c * (25.0 / 20.0);  // 5 m behind on the centre's ray
+  EXPECT_TRUE(InDetectionGate(gate, c + Eigen::Vector3d(3.9, 0.0, 0.0)));
+  EXPECT_FALSE(InDetectionGate(gate, c + Eigen::Vector3d(4.1, 0.0, 0.0)));
+  EXPECT_FALSE(InDetectionGate(gate, behind));  // ray_sigmas 0: the sphere alone
+  gate.ray_sigmas = 3.0;
+  gate.depth_sigma_at_centre = 0.5;  // 4 m + 1.5 m along the ray
+  EXPECT_TRUE(InDetectionGate(gate, behind));
+  EXPECT_TRUE(InDetectionGate(gate, c * (15.0 / 20.0)));   // 5 m in front
+  EXPECT_FALSE(InDetectionGate(gate, c * (26.0 / 20.0)));  // 6 m behind
+  // Its ray passes the centre by more than the radius (4.4 m): out, although
+  // its depth is within the along-ray gate.
+  EXPECT_FALSE(InDetectionGate(gate, c + Eigen::Vector3d(4.5, 0.0, 0.0)));
+  gate.depth_sigma_at_centre = 0.2;  // 4 m + 0.6 m
+  EXPECT_FALSE(InDetectionGate(gate, behind));
+
+  // The same decisions in another frame (world: camera moved and turned).
+  gate.depth_sigma_at_centre = 0.5;
+  const Eigen::Isometry3d world_from_camera =
+      Eigen::Translation3d(5.0, -1.0, 30.0) * Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitY());
+  DetectionGate world = gate;
+  world.camera_centre = world_from_camera.translation();
+  world.optical_axis = world_from_camera.linear().col(2);
+  world.box_centre = world_from_camera * gate.box_centre;
+  for (const Eigen::Vector3d& p : {Eigen::Vector3d(c + Eigen::Vector3d(3.9, 0.0, 0.0)), behind,
+                                   Eigen::Vector3d(c * (26.0 / 20.0)),
+                                   Eigen::Vector3d(c + Eigen::Vector3d(4.5, 0.0, 0.0))}) {
+    EXPECT_EQ(InDetectionGate(world, world_from_camera * p), InDetectionGate(gate, p)) << p.transpose();
+  }
 }
 
 }  // namespace

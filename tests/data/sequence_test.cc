@@ -218,7 +218,7 @@ TEST_F(SequenceTest, EndToEnd) {
       EXPECT_LT(outside[outside.size() * 95 / 100], 0.02);
     }
     for (size_t k = 0; k < f.candidate_sigmas.size(); ++k) {
-      const double z = f.candidate_depths[k];
+      const double z = 0.54 * 350 / f.candidate_disparities_px[k];
       ASSERT_NEAR(f.candidate_sigmas[k], z * z / (0.54 * 350), 1e-6);
     }
   }
@@ -316,6 +316,35 @@ TEST_F(SequenceTest, PrincipalPointOutsideTheImageNamesTheFile) {
   ExpectError([&] { SequenceReader reader(dir_.string(), SequenceOptions()); }, {"calib/000007.txt:1:"});
 }
 
+// A detection without a volume is an error naming its file and number (the
+// tracker's message named neither).
+TEST_F(SequenceTest, ZeroSizeDetectionNamesItsFile) {
+  ObjectLabel flat = CarDetection(SmallCalibration(), 2);
+  flat.width = 0;
+  WriteLabels((dir_ / "detections" / (Tag(2) + ".txt")).string(), {flat});
+  ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); },
+              {"detections/000007_02.txt: detection 1 (Car) has a zero size"});
+}
+
+// A frame missing in the middle of a sequence is reported (warning and the
+// summary's messages, which go to tracks.json), naming the missing frames.
+TEST_F(SequenceTest, GapInFrameNumbersIsReported) {
+  for (const char* folder : {"image_2", "image_3", "disparity", "detections", "planes"}) {
+    for (const char* extension : {".png", ".txt"}) fs::remove(dir_ / folder / (Tag(2) + extension));
+  }
+  SequenceSummary summary;
+  try {
+    LoadSequenceTracks(dir_.string(), SequenceOptions(), &summary);
+  } catch (const Error&) {
+    // The linking across the gap may fail; the listing was reported first.
+  }
+  bool found = false;
+  for (const std::string& message : summary.messages)
+    found = found || message == "000007: frame(s) 2 missing (no image, disparity or detection file) between "
+                                "frames 1 and 3";
+  EXPECT_TRUE(found) << ::testing::PrintToString(summary.messages);
+}
+
 TEST_F(SequenceTest, MalformedPlaneNamesTheFile) {
   std::ofstream((dir_ / "planes" / (Tag(0) + ".txt")).string()) << "# Matrix\nWIDTH 4\nHEIGHT 1\n0 -1 0\n";
   ExpectError([&] { LoadSequenceTracks(dir_.string(), SequenceOptions()); }, {"000007_00.txt:4: 3 numbers"});
@@ -370,7 +399,8 @@ TEST(RealKittiTest, FindsTheCarsPoints) {
   const TrackFrame& f = tracks[0].frames[0];
   EXPECT_EQ(f.frame, 10);
   ASSERT_GT(f.candidate_points_in_world.size(), 1000u);
-  std::vector<float> depths = f.candidate_depths;
+  std::vector<float> depths;
+  for (float d : f.candidate_disparities_px) depths.push_back(float(tracks[0].calibration.baseline * tracks[0].calibration.camera.fx / d));
   std::sort(depths.begin(), depths.end());
   const float median = depths[depths.size() / 2];
   EXPECT_GT(median, 12.0f);

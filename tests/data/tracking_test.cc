@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/data/detector_noise.h"
 #include "libsamp/data/observations.h"
 #include "tests/testing/expect_error.h"
 
@@ -637,6 +638,158 @@ TEST(TrackingStereoDetector, OptionsAreCheckedAndWrittenAsJson) {
   for (const char* key : {"along_sigma_a", "across_sigma_b", "vertical_sigma_a", "size_sigma", "yaw_gate_deg",
                           "max_misses", "max_join_gap", "join_gate_chi2", "swap_margin"})
     EXPECT_NE(json.find(key), std::string::npos) << key;
+}
+
+
+// ---------------------------------------------------------------------------
+// Robust association (issue 28): a detector three times noisier in box size
+// than the tracker's default assumes (0.9 m against 0.3 m).
+
+std::vector<SimCar> MixedTraffic() {
+  std::vector<SimCar> cars = ParkedRow();
+  for (const SimCar& c : StraightTraffic()) cars.push_back(c);
+  return cars;
+}
+
+// Without robust cues every size cue gates and the cars split; robust cues
+// alone (the default sigmas) mend part of it; self-calibration (below) all.
+TEST(TrackingRobust, NoisySizesSplitLessWithRobustCues) {
+  DetectorModel model;
+  model.size = 0.9;
+  const TrackingFigures plain = RunScenes(MixedTraffic(), model, TrackerOptions(), 5, 800);
+  TrackerOptions options;
+  options.robust_cues = true;
+  const TrackingFigures robust = RunScenes(MixedTraffic(), model, options, 5, 800);
+  EXPECT_GE(plain.TracksPerCar(), 1.3) << plain.Report();
+  EXPECT_LE(robust.TracksPerCar(), plain.TracksPerCar() - 0.2) << robust.Report() << " against " << plain.Report();
+  EXPECT_GE(robust.MainShare(), 0.95) << robust.Report();
+}
+
+// A single wrong box length, or a box turned by 90 degrees, in a car's
+// otherwise steady track does not start a new track with robust cues.
+TEST(TrackingRobust, OneWrongCueDoesNotSplitTheTrack) {
+  for (int which = 0; which < 2; ++which) {
+    std::vector<FrameDetections> frames;
+    for (int t = 0; t < 12; ++t) {
+      FrameDetections fd;
+      fd.frame = t;
+      fd.world_from_camera = EgoPose(t);
+      ObjectLabel d = DetectionAt(Eigen::Vector3d(3.0, 0.9, 25.0 + 0.8 * t), t, 1.0);
+      d.rotation_y = -M_PI / 2 - 0.02 * t;  // heading +z in the world
+      if (t == 6 && which == 0) d.length = 9.0;       // a wrong box length
+      if (t == 6 && which == 1) d.rotation_y += M_PI / 2;  // a box turned by 90 degrees
+      fd.detections.push_back(d);
+      frames.push_back(fd);
+    }
+    TrackerOptions options;
+    options.join_fragments = false;  // the online stage alone
+    TrackingSummary plain_summary, robust_summary;
+    const std::vector<LinkedTrack> plain = LinkDetections(frames, options, &plain_summary);
+    EXPECT_GT(plain_summary.num_online_tracks, 1) << which;
+    options.robust_cues = true;
+    const std::vector<LinkedTrack> robust = LinkDetections(frames, options, &robust_summary);
+    EXPECT_EQ(robust_summary.num_online_tracks, 1) << which << ": " << robust_summary.BriefReport();
+    ASSERT_EQ(robust.size(), 1u);
+    EXPECT_EQ(robust[0].detections.size(), 12u);
+    // Joining fragments with the robust link cost mends the split of the plain tracker too.
+    TrackerOptions join = TrackerOptions();
+    join.robust_cues = true;
+    const std::vector<LinkedTrack> joined = LinkDetections(frames, join, nullptr);
+    EXPECT_EQ(joined.size(), 1u) << which;
+  }
+}
+
+// 1,000 identical detections in every frame: flagged and dropped, one track;
+// the association is linear in the detections per frame (with the dense
+// assignment of the previous version this took minutes: 300 duplicates, 42 s).
+TEST(TrackingRobust, ThousandDuplicatesAreFlagged) {
+  std::vector<FrameDetections> frames;
+  for (int t = 0; t < 5; ++t) {
+    FrameDetections fd;
+    fd.frame = t;
+    fd.world_from_camera = EgoPose(t);
+    const ObjectLabel d = DetectionAt(Eigen::Vector3d(-3.0, 0.9, 20.0), t, 1.0);
+    fd.detections.assign(1000, d);
+    frames.push_back(fd);
+  }
+  TrackingSummary summary;
+  const std::vector<LinkedTrack> tracks = LinkDetections(frames, TrackerOptions(), &summary);
+  ASSERT_EQ(tracks.size(), 1u) << summary.BriefReport();
+  EXPECT_EQ(tracks[0].detections.size(), 5u);
+  EXPECT_EQ(summary.num_detections, 5000);
+  EXPECT_EQ(summary.num_duplicates, 4995);
+  ASSERT_EQ(summary.duplicates.size(), 5u);
+  EXPECT_EQ(summary.duplicates[0], "frame 0: 999 duplicates");
+  EXPECT_NE(summary.BriefReport().find("4995 duplicate"), std::string::npos);
+  EXPECT_NE(summary.ToJson().find("\"duplicates\":4995"), std::string::npos);
+}
+
+// Many distinct cars in one frame (a 30 x 30 grid of parked cars, 900
+// detections per frame): each stays one track; the spatial gate keeps the
+// assignment groups small.
+TEST(TrackingRobust, ManyCarsPerFrameOneTrackEach) {
+  std::vector<FrameDetections> frames;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, 0.05);
+  for (int t = 0; t < 4; ++t) {
+    FrameDetections fd;
+    fd.frame = t;
+    for (int i = 0; i < 30; ++i)
+      for (int j = 0; j < 30; ++j) {
+        ObjectLabel d;
+        d.height = 1.5, d.width = 1.7, d.length = 4.0;
+        d.position = Eigen::Vector3d(-60 + 4.0 * i + noise(rng), 1.65, 5 + 7.0 * j + noise(rng));
+        d.rotation_y = 0.0;
+        d.alpha = 30 * i + j;
+        fd.detections.push_back(d);
+      }
+    frames.push_back(fd);
+  }
+  TrackingSummary summary;
+  const std::vector<LinkedTrack> tracks = LinkDetections(frames, TrackerOptions(), &summary);
+  ASSERT_EQ(tracks.size(), 900u) << summary.BriefReport();
+  for (const LinkedTrack& t : tracks) {
+    ASSERT_EQ(t.detections.size(), 4u);
+    for (const ObjectLabel& d : t.detections) EXPECT_EQ(d.alpha, t.detections.front().alpha);
+  }
+  EXPECT_EQ(summary.num_duplicates, 0);
+}
+
+TEST(TrackingRobust, RobustCuesInJsonOnlyWhenOn) {
+  EXPECT_EQ(TrackerOptions().ToJson().find("robust_cues"), std::string::npos);
+  TrackerOptions o;
+  o.robust_cues = true;
+  EXPECT_NE(o.ToJson().find("\"robust_cues\":true"), std::string::npos);
+}
+
+// Self-calibration (issue 28): link with robust cues, estimate the detector's
+// noise from the tracks, re-link with it. Five sequences of the mixed traffic
+// pooled, sizes three times noisier than the default assumes.
+TEST(TrackingSelfCalibration, NoisySizesAreMeasuredAndStayOneTrackPerCar) {
+  DetectorModel model;
+  model.size = 0.9;
+  std::vector<SimSequence> sims;
+  std::vector<std::vector<FrameDetections>> frames;
+  for (int s = 0; s < 5; ++s) {
+    sims.push_back(Simulate(MixedTraffic(), SimEgo(), model, 900 + s));
+    frames.push_back(sims.back().frames);
+  }
+  const CalibrationResult calibration = CalibrateTracker(frames, TrackerOptions(), CalibrationOptions());
+  const DetectorNoiseModel& m = calibration.model;
+  EXPECT_EQ(m.source, "self-calibration") << calibration.BriefReport();
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(m.size_sigma[i], 0.9, 0.25 * 0.9) << calibration.BriefReport();
+  EXPECT_NEAR(m.yaw_sigma_deg, 5.0, 0.25 * 5.0) << calibration.BriefReport();
+  // Flips 7 %, misses 5 % (interior gaps only, so at most that).
+  EXPECT_NEAR(m.flip_rate, 0.07, 0.03) << calibration.BriefReport();
+  EXPECT_LE(m.miss_rate, 0.07) << calibration.BriefReport();
+  EXPECT_TRUE(calibration.tracker.robust_cues);
+  EXPECT_GT(calibration.tracker.size_sigma, 0.7);
+  TrackingFigures total;
+  for (size_t s = 0; s < sims.size(); ++s)
+    total.Add(Score(LinkDetections(sims[s].frames, calibration.tracker, nullptr), sims[s]));
+  EXPECT_LE(total.TracksPerCar(), 1.10) << total.Report();
+  EXPECT_LE(total.SwitchesPerCar(), 0.1) << total.Report();
+  EXPECT_GE(total.MainShare(), 0.95) << total.Report();
 }
 
 }  // namespace

@@ -6,9 +6,9 @@
 #include <iostream>
 
 #include "libsamp/eval/evaluation.h"
-#include "libsamp/eval/synth.h"
+#include "libsamp/synth/synth.h"
 #include "libsamp/pipeline/run_fit.h"
-#include "tests/eval/test_scene.h"
+#include "tests/synth/test_scene.h"
 
 namespace samp {
 namespace {

@@ -400,10 +400,18 @@ TEST(ShapeModel, ForeignAndMismatchedVdbFilesGiveErrors) {
   write({grids[0], grids[1]}, meta);
   ExpectLoadError(broken, "'pc_1' is missing");
 
+  // A NaN value does not survive OpenVDB's dense-to-sparse copy: the grid's
+  // checksum fails when WriteVdb reads the written file back, so the file is
+  // refused before it replaces `broken` (which keeps the previous contents).
   std::vector<DenseGrid> with_nan = grids;
   with_nan[1].values[3] = std::nanf("");
-  write(with_nan, meta);
-  EXPECT_THROW(ShapeModel::Load(broken), Error);
+  try {
+    write(with_nan, meta);
+    ADD_FAILURE() << "a grid with a NaN was written";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("does not read back"), std::string::npos) << e.what();
+  }
+  ExpectLoadError(broken, "'pc_1' is missing");
 
   // Valid structure, different values: the checksum catches it.
   write(grids, meta);

@@ -301,6 +301,35 @@ TEST_F(TrainerTest, RejectsBadOptionsAndFolders) {
   EXPECT_THROW(TrainShapeModel(options), Error);
 }
 
+// `samp train -o` onto one of its own input meshes (or the manifest, or a
+// hard link to a mesh) is refused before
+// anything is computed, and the input stays byte-identical.
+TEST_F(TrainerTest, RefusesToWriteOverItsInputs) {
+  const std::string mesh = (cad_ / "ellipsoid0.obj").string();
+  std::ifstream in(mesh, std::ios::binary);
+  const std::string before((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto error_of = [](const TrainOptions& options) {
+    try {
+      TrainShapeModel(options);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  TrainOptions options = options_;
+  options.output_path = (cad_ / "sub" / ".." / "ellipsoid0.obj").string();
+  EXPECT_NE(error_of(options).find("is the input mesh " + mesh), std::string::npos) << error_of(options);
+  options.output_path = manifest_;
+  EXPECT_NE(error_of(options).find("is the manifest"), std::string::npos);
+  const std::string link = (root_ / "link.obj").string();
+  fs::create_hard_link(mesh, link);
+  options.output_path = link;
+  EXPECT_NE(error_of(options).find("is the input mesh " + mesh), std::string::npos) << error_of(options);
+  std::ifstream again(mesh, std::ios::binary);
+  EXPECT_EQ(std::string((std::istreambuf_iterator<char>(again)), std::istreambuf_iterator<char>()), before);
+  EXPECT_FALSE(fs::exists(options_.output_path));
+}
+
 // The trainer options stored in a model file have one reader beside their
 // writer: it reads back every option written, and a missing key is an error
 // naming the source and the key.

@@ -3,6 +3,8 @@
 #include "libsamp/pipeline/fit_output.h"
 
 #include <gtest/gtest.h>
+#include <iterator>
+#include <fstream>
 
 #include <unistd.h>
 
@@ -193,6 +195,36 @@ TEST(FitOutput, TracksFileRoundTripAndMissingKeys) {
   EXPECT_NE(message.find(path), std::string::npos) << message;
   EXPECT_NE(message.find("sequences[0].tracks[0].frames[1]"), std::string::npos) << message;
   EXPECT_NE(message.find("'yaw'"), std::string::npos) << message;
+}
+
+// Bytes that are not UTF-8 in a sequence folder or calibration name (a
+// Latin-1 name) are written as U+FFFD: tracks.json and config.json once threw
+// json type_error 316 at the last step (issue 32).
+TEST(FitOutput, NonUtf8NamesAreWrittenAsReplacementCharacters) {
+  TracksFile file;
+  file.model = "model\xff.vdb";
+  TracksFileSequence sequence;
+  sequence.directory = "seq/caf\xe9";
+  sequence.name = "caf\xe9";
+  sequence.ok = false;
+  sequence.error = "calib/caf\xe9.txt: cannot open";
+  file.sequences.push_back(sequence);
+  const std::string tracks = TempFile("latin1_tracks.json");
+  WriteTracksFile(tracks, file);
+  std::ifstream in(tracks, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("caf\xef\xbf\xbd"), std::string::npos) << text;
+  EXPECT_EQ(text.find('\xe9'), std::string::npos);
+
+  FitConfig config;
+  config.options.model_path = "model\xff.vdb";
+  config.options.sequences = {"seq/caf\xe9"};
+  config.options.output_dir = "out";
+  const std::string path = TempFile("latin1_config.json");
+  WriteFitConfig(path, config);
+  std::ifstream config_in(path, std::ios::binary);
+  const std::string config_text((std::istreambuf_iterator<char>(config_in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(config_text.find("seq/caf\xef\xbf\xbd"), std::string::npos) << config_text;
 }
 
 TEST(FitOutput, ConfigHoldsEveryOptionAndReadsBack) {

@@ -16,10 +16,10 @@
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/data/kitti_io.h"
-#include "libsamp/eval/synth.h"
+#include "libsamp/synth/synth.h"
 #include "libsamp/pipeline/fit_output.h"
 #include "libsamp/pipeline/run_fit.h"
-#include "tests/eval/test_scene.h"
+#include "tests/synth/test_scene.h"
 #include "tests/testing/expect_error.h"
 
 namespace samp {
@@ -74,10 +74,11 @@ std::vector<std::string> Temporaries(const std::string& folder) {
 
 using test::ErrorOf;
 
-// A run that fits tracks writes labels and meshes; a later run into the same
-// folder that fits none (every solve unusable), or whose every sequence
-// fails, replaces the folder as a whole: no label line, mesh, picture or page
-// of the earlier run survives.
+// A run that fits tracks writes labels and meshes; a later successful run
+// into the same folder replaces it as a whole: no label line, mesh, picture
+// or page of the earlier run survives. A failed run (no track fitted, every
+// sequence failed, one sequence of a batch failed) never replaces it: the
+// earlier output stays byte-identical (samp fit exits 1).
 TEST(RunFit, ReplacesTheOutputOfAnEarlierRun) {
   const test::BoxCarScene& scene = TheScene();
   const std::string runs = TheScene().Folder("replace");
@@ -90,29 +91,53 @@ TEST(RunFit, ReplacesTheOutputOfAnEarlierRun) {
   EXPECT_FALSE(first.replaced_previous_output);
   ASSERT_FALSE(ReadTrackingLabels(labels).empty());
   ASSERT_TRUE(fs::is_directory(out + "/meshes"));
-  // What `samp view` and --pictures add to a fit folder.
+  EXPECT_TRUE(fs::is_regular_file(out + "/" + kOutputFolderMarker));
+  // What `samp view` and --pictures add to a fit folder (recorded in its marker).
   WriteTextFileAtomically(out + "/index.html", "<html></html>");
   WriteTextFileAtomically(out + "/pictures/" + scene.names[0] + "/birdseye.png", "png");
+  RecordInOutputFolder(out, {out + "/index.html", out + "/pictures/" + scene.names[0] + "/birdseye.png"});
+  const std::set<std::string> earlier = Listing(out);
+  const std::string earlier_labels = test::ReadText(labels);
 
-  // Zero tracks fitted: every solve unusable.
+  // Failed runs keep the earlier output. Zero tracks fitted (every solve unusable):
   const RunFitSummary second = RunFit(UnusableOptions({scene.sequences[0]}, out));
   EXPECT_EQ(second.num_tracks_fitted, 0);
   EXPECT_NE(second.failure, "");
-  EXPECT_TRUE(second.replaced_previous_output);
-  EXPECT_TRUE(ReadTrackingLabels(labels).empty());
-  EXPECT_EQ(Listing(out), (std::set<std::string>{"config.json", "label_02", "label_02/" + scene.names[0] + ".txt",
-                                                 "tracks.json"}));
-  const TracksFile tracks = ReadTracksFile(out + "/tracks.json");
-  ASSERT_EQ(tracks.sequences.size(), 1u);
-  EXPECT_TRUE(tracks.sequences[0].tracks.empty());
-  EXPECT_EQ(tracks.sequences[0].failed_tracks.size(), first.sequences.at(0).num_fitted + 0u);
-
-  // Every sequence failed (a folder that is no sequence): no label file at all.
+  EXPECT_FALSE(second.replaced_previous_output);
+  EXPECT_TRUE(second.kept_previous_output);
+  EXPECT_EQ(Listing(out), earlier);
+  EXPECT_EQ(test::ReadText(labels), earlier_labels);
+  // Every sequence failed (a folder that is no sequence):
   const RunFitSummary third = RunFit(Options(scene.model, {runs + "/no_such_sequence"}, out));
   EXPECT_EQ(third.num_sequences_failed, 1);
   EXPECT_EQ(third.failure, "every sequence failed");
-  EXPECT_EQ(Listing(out), (std::set<std::string>{"config.json", "tracks.json"}));
-  EXPECT_FALSE(ReadTracksFile(out + "/tracks.json").sequences.at(0).ok);
+  EXPECT_TRUE(third.kept_previous_output);
+  EXPECT_EQ(Listing(out), earlier);
+  // One sequence of a batch failed:
+  const RunFitSummary batch = RunFit(Options(scene.model, {scene.sequences[0], runs + "/no_such_sequence"}, out));
+  EXPECT_EQ(batch.num_sequences_failed, 1);
+  EXPECT_NE(batch.failure.find("1 of 2 sequences failed: " + runs + "/no_such_sequence"), std::string::npos)
+      << batch.failure;
+  EXPECT_TRUE(batch.kept_previous_output);
+  EXPECT_EQ(Listing(out), earlier);
+  EXPECT_EQ(test::ReadText(labels), earlier_labels);
+
+  // A successful run replaces everything (here without meshes).
+  RunFitOptions no_meshes = Options(scene.model, {scene.sequences[0]}, out);
+  no_meshes.write_meshes = false;
+  const RunFitSummary fourth = RunFit(no_meshes);
+  EXPECT_EQ(fourth.failure, "");
+  EXPECT_TRUE(fourth.replaced_previous_output);
+  EXPECT_EQ(Listing(out), (std::set<std::string>{kOutputFolderMarker, "config.json", "label_02",
+                                                 "label_02/" + scene.names[0] + ".txt", "tracks.json"}));
+
+  // A failed run into a new folder is written (its tracks.json says why).
+  const std::string fresh = runs + "/fresh";
+  const RunFitSummary failed_fresh = RunFit(Options(scene.model, {runs + "/no_such_sequence"}, fresh));
+  EXPECT_EQ(failed_fresh.failure, "every sequence failed");
+  EXPECT_FALSE(failed_fresh.kept_previous_output);
+  EXPECT_EQ(Listing(fresh), (std::set<std::string>{kOutputFolderMarker, "config.json", "tracks.json"}));
+  EXPECT_FALSE(ReadTracksFile(fresh + "/tracks.json").sequences.at(0).ok);
   EXPECT_TRUE(Temporaries(runs).empty());
 }
 
@@ -151,7 +176,8 @@ TEST(RunFit, RunThatThrowsLeavesTheOutputAsItWas) {
   EXPECT_TRUE(Temporaries(runs).empty());
 }
 
-// Only new, empty or samp fit folders are replaced; the others are refused
+// Only new, empty or samp-made folders (marker file listing every file) are
+// replaced; the others are refused
 // before anything is read, and stay as they were.
 TEST(RunFit, RefusesOutputFoldersItMustNotReplace) {
   const test::BoxCarScene& scene = TheScene();
@@ -167,8 +193,42 @@ TEST(RunFit, RefusesOutputFoldersItMustNotReplace) {
   WriteTextFileAtomically(mine + "/notes.txt", "keep");
   const std::string message = ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, mine)); });
   EXPECT_NE(message.find(mine), std::string::npos) << message;
-  EXPECT_NE(message.find("not the output of a samp fit"), std::string::npos) << message;
+  EXPECT_NE(message.find("was not made by samp"), std::string::npos) << message;
   EXPECT_EQ(Listing(mine), (std::set<std::string>{"notes.txt"}));
+
+  // A user's folder that merely looks like a fit output (the case of issue 32:
+  // tracks.json and config.json beside a thesis) is not samp's.
+  const std::string thesis = runs + "/thesis";
+  WriteTextFileAtomically(thesis + "/tracks.json", "{}");
+  WriteTextFileAtomically(thesis + "/config.json", "{}");
+  WriteTextFileAtomically(thesis + "/thesis.tex", "t");
+  EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, thesis)); }).find("was not made by samp"),
+            std::string::npos);
+  EXPECT_EQ(test::ReadText(thesis + "/thesis.tex"), "t");
+
+  // An earlier samp run with a file added by the user: refused, naming it.
+  const std::string earlier = runs + "/earlier";
+  RunFitOptions link = Options(scene.model, {scene.sequences[0]}, earlier);
+  link.link_only = true;
+  ASSERT_EQ(RunFit(link).failure, "");
+  WriteTextFileAtomically(earlier + "/label_02/my_notes.txt", "mine");
+  const std::string foreign = ErrorOf([&] { RunFit(link); });
+  EXPECT_NE(foreign.find("holds 1 file(s) samp did not write: label_02/my_notes.txt"), std::string::npos) << foreign;
+  EXPECT_EQ(test::ReadText(earlier + "/label_02/my_notes.txt"), "mine");
+  // A forged marker does not list the user's file either.
+  WriteTextFileAtomically(thesis + "/" + kOutputFolderMarker, "samp output folder\nrun_id 0\nfile tracks.json\n");
+  EXPECT_NE(ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, thesis)); })
+                .find("samp did not write: config.json, thesis.tex"),
+            std::string::npos);
+
+  // An input reached through a hard link inside an earlier run's folder.
+  fs::remove(earlier + "/label_02/my_notes.txt");
+  const std::string model_link = earlier + "/model_copy.vdb";
+  fs::create_hard_link(scene.model, model_link);
+  RecordInOutputFolder(earlier, {model_link});
+  const std::string linked = ErrorOf([&] { RunFit(Options(scene.model, {scene.sequences[0]}, earlier)); });
+  EXPECT_NE(linked.find("holds the input model"), std::string::npos) << linked;
+  EXPECT_TRUE(fs::exists(scene.model));
 
   // The folder that holds the sequence (or the model, or is the sequence).
   const std::string parent = fs::path(scene.sequences[0]).parent_path().string();
@@ -287,6 +347,70 @@ TEST(RunFit, RemovesTheTemporaryFolderOfAKilledRun) {
   EXPECT_FALSE(fs::exists(orphan));
   EXPECT_TRUE(fs::exists(alive));
   EXPECT_TRUE(fs::exists(runs + "/out/tracks.json"));
+}
+
+}  // namespace
+}  // namespace samp
+
+namespace samp {
+namespace {
+
+// Self-calibration (issue 28) on the small scene: too few detections for an
+// estimate, so every term keeps the given sigmas with a note; the model and its
+// sample counts go to the summary and OUT/detector_model.json, the option to
+// config.json. Off: neither (the outputs of earlier versions).
+TEST(RunFitCalibration, SelfCalibrationWritesTheModel) {
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = scene.Folder("calibrate");
+  RunFitOptions o = Options(scene.model, {scene.sequences[0]}, runs + "/on");
+  o.self_calibrate = true;
+  const RunFitSummary on = RunFit(o);
+  ASSERT_GT(on.num_tracks_fitted, 0) << on.BriefReport();
+  EXPECT_TRUE(on.detector_model_used);
+  EXPECT_NE(on.BriefReport().find("detector self-calibration"), std::string::npos) << on.BriefReport();
+  EXPECT_EQ(on.detector_model.source, "defaults");
+  EXPECT_FALSE(on.detector_model.notes.empty());
+  const DetectorNoiseModel written = ReadDetectorNoiseModel(runs + "/on/detector_model.json");
+  EXPECT_EQ(written.ToJson(), on.detector_model.ToJson());
+  EXPECT_EQ(written.size_sigma[0], o.sequence.tracker.size_sigma);
+  std::ifstream config(runs + "/on/config.json");
+  const std::string text((std::istreambuf_iterator<char>(config)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("\"self_calibrate\": true"), std::string::npos);
+
+  const RunFitSummary off = RunFit(Options(scene.model, {scene.sequences[0]}, runs + "/off"));
+  EXPECT_FALSE(off.detector_model_used);
+  EXPECT_FALSE(fs::exists(runs + "/off/detector_model.json"));
+  std::ifstream config_off(runs + "/off/config.json");
+  const std::string text_off((std::istreambuf_iterator<char>(config_off)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text_off.find("self_calibrate"), std::string::npos);
+  EXPECT_EQ(text_off.find("robust_cues"), std::string::npos);
+}
+
+// A detector model file replaces the tracker's sigmas; a bad one is a clear
+// error before anything is written; it excludes self-calibration.
+TEST(RunFitCalibration, DetectorModelFile) {
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = scene.Folder("detector_model");
+  fs::create_directories(runs);
+  DetectorNoiseModel model;
+  model.source = "ground truth";
+  model.size_sigma[0] = model.size_sigma[1] = model.size_sigma[2] = 0.5;
+  WriteDetectorNoiseModel(runs + "/model.json", model);
+  RunFitOptions o = Options(scene.model, {scene.sequences[0]}, runs + "/out");
+  o.detector_model_path = runs + "/model.json";
+  const RunFitSummary summary = RunFit(o);
+  ASSERT_GT(summary.num_tracks_fitted, 0) << summary.BriefReport();
+  EXPECT_TRUE(summary.detector_model_used);
+  EXPECT_NE(summary.calibration_report.find("read from"), std::string::npos);
+  EXPECT_EQ(ReadDetectorNoiseModel(runs + "/out/detector_model.json").size_sigma[1], 0.5);
+
+  WriteTextFileAtomically(runs + "/bad.json", "{\"format\": \"samp-detector-model\", \"version\": 9}");
+  o.detector_model_path = runs + "/bad.json";
+  o.output_dir = runs + "/bad_out";
+  test::ExpectError([&] { RunFit(o); }, {"bad.json", "version 9"});
+  EXPECT_FALSE(fs::exists(runs + "/bad_out"));
+  o.self_calibrate = true;
+  test::ExpectError([&] { RunFit(o); }, {"self_calibrate", "detector_model_path"});
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cerrno>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -9,6 +10,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/ply_io.h"
 #include "test_util.h"
+#include "tests/testing/small_disk.h"
 
 namespace samp {
 namespace {
@@ -94,7 +96,13 @@ TEST(MeshIo, OffCountsTheFileCannotHoldAreRefusedBeforeAssimp) {
   const std::string big = (dir / "big.off").string();
   test::WriteText(huge, "OFF\n99999999999999999999994 4 6\n0 0 1\n1 0 0\n0 1 0\n3 0 2 1\n");
   test::WriteText(big, "# comment\nOFF 4 400000 0\n0 0 0\n2 0 0\n0 3 0\n0 0 4\n3 0 2 1\n");
-  for (const std::string& path : {huge, big}) {
+  // Issue 32: the keyword glued to the count (43 bytes took 2.4 GB), and a
+  // count followed by a non-digit, which the guard used to leave to assimp.
+  const std::string glued = (dir / "glued.off").string();
+  const std::string suffixed = (dir / "suffixed.obj").string();  // the content decides, not the extension
+  test::WriteText(glued, "OFF200000000 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  test::WriteText(suffixed, "OFF\n200000000x 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  for (const std::string& path : {huge, big, glued, suffixed}) {
     try {
       LoadMesh(path);
       ADD_FAILURE() << "expected an error for " << path;
@@ -103,6 +111,41 @@ TEST(MeshIo, OffCountsTheFileCannotHoldAreRefusedBeforeAssimp) {
       EXPECT_NE(std::string(e.what()).find("OFF header announces"), std::string::npos) << e.what();
     }
   }
+  fs::remove_all(dir);
+}
+
+// Binary and ASCII PLY headers whose element counts the file cannot hold
+// (10^8 vertices with 100 bytes of body took 1.26 GB, 10^9 was killed at
+// 6 GB) are refused before assimp; so is a count that is not a number.
+TEST(MeshIo, PlyCountsTheFileCannotHoldAreRefusedBeforeAssimp) {
+  const fs::path dir = test::TempDir("ply_counts");
+  const std::string body(100, '\x01');
+  const std::string header = "ply\nformat binary_little_endian 1.0\nelement vertex 100000000\n"
+                             "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+                             "property list uchar int vertex_indices\nend_header\n";
+  const std::string cases[][2] = {
+      {"binary.ply", header + body},
+      {"billion.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\n"
+                      "end_header\n" + body},
+      {"ascii.ply", "ply\nformat ascii 1.0\nelement vertex 5000\nproperty float x\nproperty float y\n"
+                    "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n"},
+      {"nan.ply", "ply\nformat ascii 1.0\nelement vertex 3x\nproperty float x\nend_header\n0\n1\n2\n"},
+  };
+  for (const auto& [name, text] : cases) {
+    const std::string path = (dir / name).string();
+    test::WriteText(path, text);
+    try {
+      LoadMesh(path);
+      ADD_FAILURE() << "expected an error for " << name;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("PLY"), std::string::npos) << e.what();
+    }
+  }
+  // A PLY that holds what it announces loads (samp's own writer, binary).
+  const std::string good = (dir / "good.ply").string();
+  WritePly(good, MakeBoxMesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 2, 3)));
+  EXPECT_EQ(LoadMesh(good).triangles.size(), 12u);
   fs::remove_all(dir);
 }
 
@@ -155,6 +198,38 @@ TEST(MeshIo, ExportRoundTrip) {
   EXPECT_THROW(ExportMesh((dir / "empty.ply").string(), Mesh()), Error);
   EXPECT_FALSE(fs::exists(dir / "empty.ply"));
   fs::remove_all(dir);
+}
+
+// assimp's exporters ignore write errors; samp's file output for them checks
+// every write: on a full disk ExportMesh fails naming the file and the OS
+// error, and the previous file stays byte-identical (`samp inspect --meshes`
+// once wrote truncated or empty meshes with exit 0).
+TEST(MeshIo, ExportOnAFullDiskLeavesThePreviousFile) {
+  test::SmallDisk disk("mesh", 64 << 10);
+  if (!disk.mounted()) GTEST_SKIP() << disk.reason();
+  const Mesh box = MakeBoxMesh(Eigen::Vector3d(-1, -2, -3), Eigen::Vector3d(1, 2, 3));
+  const Mesh sphere = MakeSphereMesh(Eigen::Vector3d(0, 0, 0), 1.0, 120, 240);  // ~1 MB as binary PLY
+  for (const std::string extension : {".ply", ".obj", ".stl"}) {
+    const std::string path = disk.path() + "/car" + extension;
+    ExportMesh(path, box);
+    std::ifstream in(path, std::ios::binary);
+    const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    try {
+      ExportMesh(path, sphere);
+      ADD_FAILURE() << extension << ": no error on a full disk";
+    } catch (const Error& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find(path), std::string::npos) << message;
+      EXPECT_NE(message.find(std::strerror(ENOSPC)), std::string::npos) << message;
+    }
+    std::ifstream again(path, std::ios::binary);
+    EXPECT_EQ(std::string((std::istreambuf_iterator<char>(again)), std::istreambuf_iterator<char>()), good)
+        << extension;
+    EXPECT_EQ(LoadMesh(path).triangles.size(), 12u) << extension;
+  }
+  for (const fs::directory_entry& entry : fs::directory_iterator(disk.path())) {
+    EXPECT_EQ(entry.path().filename().string().rfind(".tmp", 0), std::string::npos) << entry.path();
+  }
 }
 
 // A float with the given low byte (little-endian: the first byte written).

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -11,6 +13,7 @@
 #include <openvdb/openvdb.h>
 
 #include "libsamp/core/error.h"
+#include "tests/testing/small_disk.h"
 
 namespace samp {
 namespace {
@@ -99,6 +102,46 @@ TEST(VdbIo, RoundTripGridsAndMetadata) {
     EXPECT_EQ(read_meta.at(key), value);
   }
   EXPECT_EQ(read_meta.at("samp_grid_dims"), "13 7 5");
+}
+
+// A model file on a disk without room for it: WriteVdb fails naming the file
+// and the OS error, and the previous file stays byte-identical (the size and
+// checksum fields were once computed over the truncated bytes, so the
+// truncated file passed its checksum). A file that fits exactly is complete.
+TEST(VdbIo, FullDiskLeavesThePreviousFile) {
+  test::SmallDisk disk("vdb", 256 << 10);
+  if (!disk.mounted()) GTEST_SKIP() << disk.reason();
+  const std::string path = disk.path() + "/model.vdb";
+  const GridSpec spec = TestSpec();
+  const std::vector<DenseGrid> grids = TestGrids(spec);
+  WriteVdb(path, spec, grids, {{"run", "good"}});
+  const std::vector<char> good = ReadBytes(path);
+  // Larger grids than the remaining space (random values compress badly).
+  GridSpec big = spec;
+  big.dims = Eigen::Vector3i(64, 48, 40);
+  std::vector<DenseGrid> big_grids(2);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> uniform(-2.0f, 2.0f);
+  for (size_t g = 0; g < big_grids.size(); ++g) {
+    big_grids[g].name = "g" + std::to_string(g);
+    big_grids[g].values.resize(size_t(big.NumVoxels()));
+    for (float& v : big_grids[g].values) v = uniform(rng);
+  }
+  try {
+    WriteVdb(path, big, big_grids, {{"run", "too big"}});
+    ADD_FAILURE() << "writing " << 2 * big.NumVoxels() * 4 << " bytes of grids onto a 256 KiB disk did not fail";
+  } catch (const Error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find(path), std::string::npos) << message;
+    EXPECT_NE(message.find(std::strerror(ENOSPC)), std::string::npos) << message;
+  }
+  EXPECT_EQ(ReadBytes(path), good);
+  VdbMetadata meta;
+  ReadVdb(path, nullptr, &meta);
+  EXPECT_EQ(meta.at("run"), "good");
+  for (const auto& entry : fs::directory_iterator(disk.path())) {
+    EXPECT_EQ(entry.path().filename().string(), "model.vdb") << "left behind";
+  }
 }
 
 TEST(VdbIo, AllBackgroundGridKeepsItsSpec) {

@@ -16,8 +16,8 @@
 #include <thread>
 
 #include "libsamp/data/kitti_io.h"
-#include "libsamp/eval/synth.h"
-#include "tests/eval/test_scene.h"
+#include "libsamp/synth/synth.h"
+#include "tests/synth/test_scene.h"
 
 namespace samp {
 namespace {
@@ -144,6 +144,61 @@ TEST(FitCommand, TableOptionsAndDeprecatedNames) {
   const std::string table = test::ReadText(runs + "/help.out");
   EXPECT_EQ(table.rfind("| option | command line | default | rule | meaning |\n", 0), 0u) << table;
   EXPECT_NE(table.find("| em_iterations | `--em-iterations` | 1 | >= 0 |"), std::string::npos) << table;
+}
+
+// A batch where one sequence fails exits 1 (everything asked for was not
+// written) and leaves an earlier good output byte-identical.
+TEST(FitCommand, BatchWithAFailedSequenceExitsOneAndKeepsTheEarlierOutput) {
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("batch_failed");
+  const std::string out = runs + "/out";
+  std::string err;
+  ASSERT_EQ(RunSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--out", out, "-q"}, runs + "/log",
+                    &err),
+            0)
+      << err;
+  const std::string labels = test::ReadText(out + "/label_02/" + scene.names[0] + ".txt");
+  const std::string tracks = test::ReadText(out + "/tracks.json");
+  const std::string missing = runs + "/no_such_sequence";
+  const int status = RunSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--seq", missing, "--out",
+                              out, "-q"},
+                             runs + "/log", &err);
+  EXPECT_EQ(status, 1) << err;
+  const std::string last = LastLine(err);
+  EXPECT_EQ(last.rfind("samp: error: 1 of 2 sequences failed: " + missing, 0), 0u) << err;
+  EXPECT_NE(last.find("keeps the earlier run's output"), std::string::npos) << err;
+  EXPECT_EQ(test::ReadText(out + "/label_02/" + scene.names[0] + ".txt"), labels);
+  EXPECT_EQ(test::ReadText(out + "/tracks.json"), tracks);
+}
+
+// Usage errors (CLI11's parse errors, which exited 105/106/109 without a
+// samp line) exit 2 with one `samp: error: ...` line; --help and --version 0.
+TEST(FitCommand, UsageErrorsExitTwoWithASampErrorLine) {
+  const std::string runs = TheScene().Folder("usage");
+  const std::vector<std::vector<std::string>> usage_errors = {
+      {},                                               // no command
+      {"no-such-command"},                              // unknown command
+      {"fit", "--no-such-option"},                      // unknown option (exited 109)
+      {"fit", "--seq"},                                 // option without its value
+      {"fit", "--seq", runs, "--out", runs + "/o", "--threads", "many"},  // not a number (105)
+      {"train", "--components", "3"},                   // required argument missing (106)
+      {"eval", "--no-such-option", "1"},
+  };
+  for (const std::vector<std::string>& args : usage_errors) {
+    std::string err;
+    std::string joined;
+    for (const std::string& a : args) joined += " " + a;
+    EXPECT_EQ(RunSamp(args, runs + "/log", &err), 2) << "samp" << joined << "\n" << err;
+    EXPECT_EQ(err.rfind("samp: error: ", 0), 0u) << "samp" << joined << "\n" << err;
+  }
+  std::string err;
+  EXPECT_EQ(RunSamp({"--help"}, runs + "/log", &err), 0) << err;
+  EXPECT_EQ(RunSamp({"fit", "--help"}, runs + "/log", &err), 0) << err;
+  EXPECT_EQ(RunSamp({"--version"}, runs + "/log", &err), 0) << err;
+  // An input that does not read is 1, not 2.
+  { std::ofstream(runs + "/garbage.vdb") << "not a model"; }
+  EXPECT_EQ(RunSamp({"inspect", runs + "/garbage.vdb"}, runs + "/log", &err), 1) << err;
+  EXPECT_EQ(err.rfind("samp: error: ", 0), 0u) << err;
 }
 
 TEST(FitCommand, SameNamedSequencesExitOneBeforeFitting) {

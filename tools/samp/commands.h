@@ -18,5 +18,6 @@ void RegisterFitCommand(CLI::App* app);
 void RegisterSynthCommand(CLI::App* app);
 void RegisterEvalCommand(CLI::App* app);
 void RegisterViewCommand(CLI::App* app);
+void RegisterCalibrateCommand(CLI::App* app);
 
 }  // namespace samp::tools

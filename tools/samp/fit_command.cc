@@ -70,6 +70,15 @@ void RegisterFitCommand(CLI::App* app) {
                       "At most this many candidate points per frame (seeded subsample; 0 = all)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  command->add_flag("--self-calibrate,!--no-self-calibrate", o.self_calibrate,
+                    "Estimate the detector's noise model from the sequences (robust linking, residuals of the "
+                    "smoothed tracks, to a fixed point) and link and fit with it; writes OUT/detector_model.json "
+                    "(docs/detector_calibration.md)")
+      ->capture_default_str();
+  command->add_option("--detector-model", o.detector_model_path,
+                      "A detector model JSON (samp calibrate-detector) giving the tracker's and the fit's "
+                      "detector sigmas (instead of --tracker-*-sigma and --self-calibrate)")
+      ->check(CLI::ExistingFile);
   command->add_flag("--link-only", o.link_only,
                     "Only link detections/ into tracks and write the tracked detections as "
                     "label_02/<seq>.txt (no model, no fit; for samp eval's tracking figures or --tracks)");
@@ -107,6 +116,9 @@ void RegisterFitCommand(CLI::App* app) {
     }
     const RunFitSummary summary = RunFit(*options);
     std::cout << summary.BriefReport() << std::endl;
+    if (summary.kept_previous_output) {
+      SAMP_THROW() << summary.failure << "; " << options->output_dir << " keeps the earlier run's output";
+    }
     std::cout << "wrote " << options->output_dir << std::endl;
     if (!summary.failure.empty()) SAMP_THROW() << summary.failure;
     if (!visuals_report.empty()) std::cout << visuals_report << std::endl;

@@ -1,6 +1,7 @@
 // samp: shape and motion priors for 4D vehicle reconstruction.
 // Dispatches to the subcommands declared in commands.h.
 #include <exception>
+#include <new>
 #include <iostream>
 
 #include "libsamp/core/atomic_file.h"
@@ -34,17 +35,36 @@ int main(int argc, char** argv) {
   samp::tools::RegisterSynthCommand(&app);
   samp::tools::RegisterEvalCommand(&app);
   samp::tools::RegisterViewCommand(&app);
+  samp::tools::RegisterCalibrateCommand(&app);
 
+  // Exit status (docs/reliability.md, "Exit status"): 0 when everything asked
+  // for was written; 1 when an input or a write failed (one line
+  // `samp: error: ...`; nothing good was replaced); 2 for a usage error (an
+  // unknown option, a missing or invalid argument), also with a
+  // `samp: error: ...` line. --help and --version exit 0.
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError& e) {
+  } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    // CLI11's own codes (105, 106, 109, ...) and its message without a prefix.
+    std::cerr << "samp: error: " << e.what() << "\nRun `samp --help` or `samp COMMAND --help` for the options."
+              << std::endl;
+    return 2;
   } catch (const samp::Error& e) {
     std::cerr << "samp: error: " << e.what() << std::endl;
     return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << "samp: error: out of memory (an input larger than the memory budget?)" << std::endl;
+    return 1;
   } catch (const std::exception& e) {
-    std::cerr << "samp: unexpected error: " << e.what() << std::endl;
-    return 2;
+    // Not a samp::Error: a bug (tools/fuzz_cli.py reports these).
+    std::cerr << "samp: error: internal error: " << e.what() << std::endl;
+    return 1;
   }
   return 0;
 }

@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "libsamp/core/log.h"
-#include "libsamp/eval/synth.h"
+#include "libsamp/synth/synth.h"
 #include "tools/samp/commands.h"
 
 namespace samp::tools {

@@ -1,0 +1,744 @@
+#include "libsamp/data/detector_noise.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "libsamp/core/json_text.h"
+#include "libsamp/core/atomic_file.h"
+#include "libsamp/core/error.h"
+#include "libsamp/core/json_fields.h"
+#include "libsamp/core/pose.h"
+#include "libsamp/data/kitti_io.h"
+#include "libsamp/data/sequence_layout.h"
+
+namespace samp {
+namespace {
+
+constexpr const char* kFormat = "samp-detector-model";
+constexpr const char* kDimensionNames[3] = {"height", "width", "length"};
+
+// Robust centre and spread of a sample: median and 1.4826 MAD, then a few
+// rounds of the mean and standard deviation of the values within trim x sigma
+// of the centre, the variance corrected for the trimming of a normal
+// distribution (Var[z | |z| < k] = 1 - 2 k phi(k) / (2 Phi(k) - 1)).
+struct RobustEstimate {
+  double center = 0.0, sigma = 0.0;
+  int count = 0;
+};
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  const size_t half = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + half, v.end());
+  double m = v[half];
+  if (v.size() % 2 == 0) m = 0.5 * (m + *std::max_element(v.begin(), v.begin() + half));
+  return m;
+}
+
+RobustEstimate Robust(const std::vector<double>& values, double trim) {
+  RobustEstimate r;
+  r.count = static_cast<int>(values.size());
+  if (values.empty()) return r;
+  r.center = Median(values);
+  std::vector<double> deviations;
+  deviations.reserve(values.size());
+  for (double v : values) deviations.push_back(std::abs(v - r.center));
+  r.sigma = 1.4826 * Median(deviations);
+  const double phi = std::exp(-0.5 * trim * trim) / std::sqrt(2 * kPi);
+  const double inside = std::erf(trim / std::sqrt(2.0));
+  const double truncated_variance = 1.0 - 2.0 * trim * phi / inside;
+  for (int round = 0; round < 5 && r.sigma > 0; ++round) {
+    double sum = 0, sum2 = 0;
+    int n = 0;
+    for (double v : values)
+      if (std::abs(v - r.center) <= trim * r.sigma) sum += v, ++n;
+    if (n < 2) break;
+    const double center = sum / n;
+    for (double v : values)
+      if (std::abs(v - r.center) <= trim * r.sigma) sum2 += (v - center) * (v - center);
+    r.center = center;
+    r.sigma = std::sqrt(sum2 / (n - 1) / truncated_variance);
+  }
+  return r;
+}
+
+// One detection's residuals against its reference (smoothed track or truth).
+struct Residual {
+  double distance = 0.0;                     // horizontal, m
+  double along = 0.0, across = 0.0, vertical = 0.0;  // m, camera frame of its frame
+  double size[3] = {0, 0, 0};                // h, w, l
+  double yaw = 0.0;                          // modulo pi, rad
+  bool has_position = false, has_size = false, has_yaw = false;
+};
+
+// Decomposes an error vector (camera frame) at `position` along the horizontal ray, across it, vertically.
+void Decompose(const Eigen::Vector3d& position, const Eigen::Vector3d& error, Residual* r) {
+  Eigen::Vector3d ray(position.x(), 0.0, position.z());
+  r->distance = ray.norm();
+  ray = r->distance > 1e-9 ? Eigen::Vector3d(ray / r->distance) : Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d across(ray.z(), 0.0, -ray.x());
+  r->along = error.dot(ray);
+  r->across = error.dot(across);
+  r->vertical = error.y();
+  r->has_position = true;
+}
+
+// Angle difference modulo pi, in [-pi/2, pi/2).
+double AxisDifference(double a, double b) {
+  double d = std::fmod(a - b, kPi);
+  if (d < -kPi / 2) d += kPi;
+  if (d >= kPi / 2) d -= kPi;
+  return d;
+}
+
+// Heading of a box in the world's horizontal plane (x, z), from its camera's rotation.
+double WorldHeading(const ObjectLabel& label, const Eigen::Matrix3d& world_from_camera) {
+  const Eigen::Vector3d front =
+      world_from_camera * Eigen::Vector3d(std::cos(label.rotation_y), 0.0, -std::sin(label.rotation_y));
+  return std::atan2(front.z(), front.x());
+}
+
+// Fits sigma(d) = a + b d (a > 0, b >= 0) to the bins' sigmas, weighted by their counts.
+bool FitLinear(const std::vector<std::pair<double, double>>& distance_sigma, const std::vector<int>& counts,
+               double* a, double* b) {
+  if (distance_sigma.empty()) return false;
+  double sw = 0, sd = 0, ss = 0, sdd = 0, sds = 0;
+  for (size_t i = 0; i < distance_sigma.size(); ++i) {
+    const double w = counts[i], d = distance_sigma[i].first, s = distance_sigma[i].second;
+    sw += w, sd += w * d, ss += w * s, sdd += w * d * d, sds += w * d * s;
+  }
+  const double det = sw * sdd - sd * sd;
+  if (distance_sigma.size() >= 2 && det > 1e-9 * sw * sdd) {
+    *b = (sw * sds - sd * ss) / det;
+    *a = (ss - *b * sd) / sw;
+  } else {
+    *b = 0.0;
+    *a = ss / sw;
+  }
+  constexpr double kMinA = 0.01;
+  if (*b < 0) {
+    *b = 0.0;
+    *a = ss / sw;
+  }
+  if (*a < kMinA) {  // the slope through the floor
+    *a = kMinA;
+    *b = sdd > 0 ? std::max(0.0, (sds - kMinA * sd) / sdd) : 0.0;
+  }
+  return true;
+}
+
+// Turns residuals into the model's sigmas (and biases when `with_biases`).
+void Summarise(const std::vector<Residual>& residuals, const DetectorNoiseOptions& o, bool with_biases,
+               const TrackerOptions& defaults, DetectorNoiseModel* model) {
+  model->along_sigma_a = defaults.along_sigma_a, model->along_sigma_b = defaults.along_sigma_b;
+  model->across_sigma_a = defaults.across_sigma_a, model->across_sigma_b = defaults.across_sigma_b;
+  model->vertical_sigma_a = defaults.vertical_sigma_a, model->vertical_sigma_b = defaults.vertical_sigma_b;
+  for (double& s : model->size_sigma) s = defaults.size_sigma;
+  model->yaw_sigma_deg = defaults.yaw_sigma_deg;
+  model->biases_estimated = with_biases;
+
+  // Position, per distance bin.
+  std::vector<double> along_all;
+  const size_t num_bins = o.bin_edges.size();
+  std::vector<std::vector<double>> along(num_bins), across(num_bins), vertical(num_bins), distance(num_bins);
+  for (const Residual& r : residuals) {
+    if (!r.has_position) continue;
+    ++model->num_position_samples;
+    size_t bin = 0;
+    while (bin + 1 < num_bins && r.distance >= o.bin_edges[bin + 1]) ++bin;
+    along[bin].push_back(r.along), across[bin].push_back(r.across), vertical[bin].push_back(r.vertical);
+    distance[bin].push_back(r.distance);
+    along_all.push_back(r.along);
+  }
+  std::vector<std::pair<double, double>> fit_along, fit_across, fit_vertical;
+  std::vector<int> fit_counts;
+  for (size_t b = 0; b < num_bins; ++b) {
+    if (along[b].empty()) continue;
+    DistanceBin bin;
+    bin.min_distance = o.bin_edges[b];
+    bin.max_distance = b + 1 < num_bins ? o.bin_edges[b + 1] : 1e3;
+    bin.count = static_cast<int>(along[b].size());
+    const RobustEstimate ea = Robust(along[b], o.trim_sigmas), ec = Robust(across[b], o.trim_sigmas),
+                         ev = Robust(vertical[b], o.trim_sigmas);
+    bin.along_sigma = ea.sigma, bin.across_sigma = ec.sigma, bin.vertical_sigma = ev.sigma;
+    if (with_biases) bin.along_bias = ea.center, bin.across_bias = ec.center, bin.vertical_bias = ev.center;
+    model->bins.push_back(bin);
+    if (bin.count < o.min_bin_count) continue;
+    double mean_distance = 0;
+    for (double d : distance[b]) mean_distance += d;
+    mean_distance /= distance[b].size();
+    fit_along.push_back({mean_distance, bin.along_sigma});
+    fit_across.push_back({mean_distance, bin.across_sigma});
+    fit_vertical.push_back({mean_distance, bin.vertical_sigma});
+    fit_counts.push_back(bin.count);
+  }
+  if (model->num_position_samples < o.min_samples || fit_counts.empty()) {
+    std::ostringstream note;
+    note << "position: " << model->num_position_samples << " detections (need " << o.min_samples
+         << ", and a distance bin of " << o.min_bin_count << "): the default position sigmas kept";
+    model->notes.push_back(note.str());
+  } else {
+    FitLinear(fit_along, fit_counts, &model->along_sigma_a, &model->along_sigma_b);
+    FitLinear(fit_across, fit_counts, &model->across_sigma_a, &model->across_sigma_b);
+    FitLinear(fit_vertical, fit_counts, &model->vertical_sigma_a, &model->vertical_sigma_b);
+    if (with_biases) model->along_bias = Robust(along_all, o.trim_sigmas).center;
+  }
+
+  // Box dimensions.
+  std::vector<double> size[3];
+  for (const Residual& r : residuals)
+    if (r.has_size)
+      for (int i = 0; i < 3; ++i) size[i].push_back(r.size[i]);
+  model->num_size_samples = static_cast<int>(size[0].size());
+  if (model->num_size_samples < o.min_samples) {
+    model->notes.push_back("size: " + std::to_string(model->num_size_samples) + " detections (need " +
+                           std::to_string(o.min_samples) + "): the default size sigma kept");
+  } else {
+    for (int i = 0; i < 3; ++i) {
+      const RobustEstimate e = Robust(size[i], o.trim_sigmas);
+      model->size_sigma[i] = std::max(e.sigma, 1e-3);
+      if (with_biases) model->size_bias[i] = e.center;
+    }
+  }
+
+  // Yaw modulo 180 degrees.
+  std::vector<double> yaw;
+  for (const Residual& r : residuals)
+    if (r.has_yaw) yaw.push_back(r.yaw);
+  model->num_yaw_samples = static_cast<int>(yaw.size());
+  if (model->num_yaw_samples < o.min_samples) {
+    model->notes.push_back("yaw: " + std::to_string(model->num_yaw_samples) + " detections (need " +
+                           std::to_string(o.min_samples) + "): the default yaw sigma kept");
+  } else {
+    model->yaw_sigma_deg = std::max(Robust(yaw, o.trim_sigmas).sigma * 180.0 / kPi, 0.01);
+  }
+}
+
+// Least-squares polynomial (degree q - 1) in time of the bottom centre in the
+// world, each detection weighted by its information matrix times a robust
+// weight; iteratively reweighted (Huber, then Tukey-like rejection).
+std::vector<Eigen::Vector3d> SmoothTrack(const std::vector<Eigen::Vector3d>& points,
+                                         const std::vector<Eigen::Matrix3d>& information,
+                                         const std::vector<double>& times, int q) {
+  const size_t n = points.size();
+  double t_mid = 0;
+  for (double t : times) t_mid += t;
+  t_mid /= n;
+  std::vector<double> robust(n, 1.0);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * q);
+  auto row = [&](size_t i) {
+    Eigen::MatrixXd a = Eigen::MatrixXd::Zero(3, 3 * q);
+    double power = 1.0;
+    for (int k = 0; k < q; ++k, power *= times[i] - t_mid) a.block<3, 3>(0, 3 * k) = power * Eigen::Matrix3d::Identity();
+    return a;
+  };
+  std::vector<Eigen::Vector3d> fitted(n);
+  for (int round = 0; round < 8; ++round) {
+    Eigen::MatrixXd lhs = 1e-9 * Eigen::MatrixXd::Identity(3 * q, 3 * q);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(3 * q);
+    for (size_t i = 0; i < n; ++i) {
+      if (robust[i] <= 0) continue;
+      const Eigen::MatrixXd a = row(i);
+      lhs += robust[i] * a.transpose() * information[i] * a;
+      rhs += robust[i] * a.transpose() * information[i] * points[i];
+    }
+    x = lhs.ldlt().solve(rhs);
+    for (size_t i = 0; i < n; ++i) {
+      fitted[i] = row(i) * x;
+      const Eigen::Vector3d r = points[i] - fitted[i];
+      const double m = std::sqrt(std::max(0.0, r.dot(information[i] * r)));
+      if (round < 4) {
+        const double k = 2.0;  // Huber
+        robust[i] = m <= k ? 1.0 : k / m;
+      } else {
+        robust[i] = m <= 4.03 ? 1.0 : 0.0;  // sqrt of chi2(3) at 99.9 %
+      }
+    }
+  }
+  return fitted;
+}
+
+void CheckModel(const DetectorNoiseModel& m, const std::string& where) {
+  auto positive = [&](double v, const char* key) {
+    SAMP_CHECK(std::isfinite(v) && v > 0) << where << ": '" << key << "' must be > 0, is " << v;
+  };
+  auto non_negative = [&](double v, const char* key) {
+    SAMP_CHECK(std::isfinite(v) && v >= 0) << where << ": '" << key << "' must be >= 0, is " << v;
+  };
+  auto share = [&](double v, const char* key) {
+    SAMP_CHECK(std::isfinite(v) && v >= 0 && v <= 1) << where << ": '" << key << "' must be in [0, 1], is " << v;
+  };
+  positive(m.along_sigma_a, "along_sigma_a");
+  non_negative(m.along_sigma_b, "along_sigma_b");
+  positive(m.across_sigma_a, "across_sigma_a");
+  non_negative(m.across_sigma_b, "across_sigma_b");
+  positive(m.vertical_sigma_a, "vertical_sigma_a");
+  non_negative(m.vertical_sigma_b, "vertical_sigma_b");
+  for (int i = 0; i < 3; ++i) {
+    positive(m.size_sigma[i], "size.sigma");
+    SAMP_CHECK(std::isfinite(m.size_bias[i])) << where << ": 'size.bias' must be finite";
+  }
+  SAMP_CHECK(std::isfinite(m.along_bias)) << where << ": 'along_bias' must be finite";
+  positive(m.yaw_sigma_deg, "yaw_sigma_deg");
+  share(m.flip_rate, "flip_rate");
+  share(m.miss_rate, "miss_rate");
+  non_negative(m.false_positives_per_frame, "false_positives_per_frame");
+}
+
+}  // namespace
+
+double DetectorNoiseModel::MeanSizeSigma() const {
+  return std::sqrt((size_sigma[0] * size_sigma[0] + size_sigma[1] * size_sigma[1] + size_sigma[2] * size_sigma[2]) /
+                   3.0);
+}
+
+void DetectorNoiseModel::ApplyTo(TrackerOptions* t) const {
+  t->along_sigma_a = along_sigma_a, t->along_sigma_b = along_sigma_b, t->along_sigma_c = 0.0;
+  t->across_sigma_a = across_sigma_a, t->across_sigma_b = across_sigma_b;
+  t->vertical_sigma_a = vertical_sigma_a, t->vertical_sigma_b = vertical_sigma_b;
+  t->size_sigma = MeanSizeSigma();
+  t->yaw_sigma_deg = yaw_sigma_deg;
+}
+
+std::string DetectorNoiseModel::BriefReport() const {
+  std::ostringstream s;
+  s.precision(3);
+  s << source << ": along " << along_sigma_a << " + " << along_sigma_b << " d, across " << across_sigma_a << " + "
+    << across_sigma_b << " d, vertical " << vertical_sigma_a << " + " << vertical_sigma_b << " d m ("
+    << num_position_samples << " detections); size h/w/l " << size_sigma[0] << "/" << size_sigma[1] << "/"
+    << size_sigma[2] << " m";
+  if (biases_estimated)
+    s << " bias " << size_bias[0] << "/" << size_bias[1] << "/" << size_bias[2] << " m, along-ray bias "
+      << along_bias << " m";
+  s << " (" << num_size_samples << "); yaw " << yaw_sigma_deg << " deg (" << num_yaw_samples << "); flips "
+    << 100 * flip_rate << " %, misses " << 100 * miss_rate << " %, " << false_positives_per_frame
+    << " false positives per frame; " << num_tracks << " tracks, " << num_frames << " frames";
+  for (const std::string& n : notes) s << "; NOTE: " << n;
+  return s.str();
+}
+
+std::string DetectorNoiseModel::ToJson() const {
+  nlohmann::json bins_json = nlohmann::json::array();
+  for (const DistanceBin& b : bins)
+    bins_json.push_back({{"min_distance", b.min_distance},
+                         {"max_distance", b.max_distance},
+                         {"count", b.count},
+                         {"along_sigma", b.along_sigma},
+                         {"across_sigma", b.across_sigma},
+                         {"vertical_sigma", b.vertical_sigma},
+                         {"along_bias", b.along_bias},
+                         {"across_bias", b.across_bias},
+                         {"vertical_bias", b.vertical_bias}});
+  nlohmann::json size = nlohmann::json::object();
+  for (int i = 0; i < 3; ++i) size[kDimensionNames[i]] = {{"sigma", size_sigma[i]}, {"bias", size_bias[i]}};
+  const nlohmann::json j = {{"format", kFormat},
+                            {"version", kVersion},
+                            {"source", source},
+                            {"along_sigma_a", along_sigma_a},
+                            {"along_sigma_b", along_sigma_b},
+                            {"across_sigma_a", across_sigma_a},
+                            {"across_sigma_b", across_sigma_b},
+                            {"vertical_sigma_a", vertical_sigma_a},
+                            {"vertical_sigma_b", vertical_sigma_b},
+                            {"along_bias", along_bias},
+                            {"size", size},
+                            {"yaw_sigma_deg", yaw_sigma_deg},
+                            {"flip_rate", flip_rate},
+                            {"miss_rate", miss_rate},
+                            {"false_positives_per_frame", false_positives_per_frame},
+                            {"biases_estimated", biases_estimated},
+                            {"samples",
+                             {{"position", num_position_samples},
+                              {"size", num_size_samples},
+                              {"yaw", num_yaw_samples},
+                              {"tracks", num_tracks},
+                              {"frames", num_frames}}},
+                            {"distance_bins", bins_json},
+                            {"notes", notes}};
+  return DumpJson(j, 2);
+}
+
+DetectorNoiseModel DetectorNoiseModelFromJson(const std::string& text, const std::string& source) {
+  const nlohmann::json j = ParseJson(text, source);
+  const JsonFields f(j, source);
+  const std::string format = f.Get<std::string>("format");
+  SAMP_CHECK(format == kFormat) << source << ": 'format' is '" << format << "', expected '" << kFormat << "'";
+  const int version = f.Get<int>("version");
+  SAMP_CHECK(version == DetectorNoiseModel::kVersion)
+      << source << ": detector model version " << version << " is not supported (this samp reads version "
+      << DetectorNoiseModel::kVersion << ")";
+  DetectorNoiseModel m;
+  f.Read("source", &m.source);
+  f.Read("along_sigma_a", &m.along_sigma_a);
+  f.Read("along_sigma_b", &m.along_sigma_b);
+  f.Read("across_sigma_a", &m.across_sigma_a);
+  f.Read("across_sigma_b", &m.across_sigma_b);
+  f.Read("vertical_sigma_a", &m.vertical_sigma_a);
+  f.Read("vertical_sigma_b", &m.vertical_sigma_b);
+  f.Read("along_bias", &m.along_bias);
+  const JsonFields size = f.Object("size");
+  for (int i = 0; i < 3; ++i) {
+    const JsonFields d = size.Object(kDimensionNames[i]);
+    d.Read("sigma", &m.size_sigma[i]);
+    d.Read("bias", &m.size_bias[i]);
+  }
+  f.Read("yaw_sigma_deg", &m.yaw_sigma_deg);
+  f.Read("flip_rate", &m.flip_rate);
+  f.Read("miss_rate", &m.miss_rate);
+  f.Read("false_positives_per_frame", &m.false_positives_per_frame);
+  f.Read("biases_estimated", &m.biases_estimated);
+  const JsonFields samples = f.Object("samples");
+  samples.Read("position", &m.num_position_samples);
+  samples.Read("size", &m.num_size_samples);
+  samples.Read("yaw", &m.num_yaw_samples);
+  samples.Read("tracks", &m.num_tracks);
+  samples.Read("frames", &m.num_frames);
+  for (const JsonFields& b : f.Objects("distance_bins")) {
+    DistanceBin bin;
+    b.Read("min_distance", &bin.min_distance);
+    b.Read("max_distance", &bin.max_distance);
+    b.Read("count", &bin.count);
+    b.Read("along_sigma", &bin.along_sigma);
+    b.Read("across_sigma", &bin.across_sigma);
+    b.Read("vertical_sigma", &bin.vertical_sigma);
+    b.Read("along_bias", &bin.along_bias);
+    b.Read("across_bias", &bin.across_bias);
+    b.Read("vertical_bias", &bin.vertical_bias);
+    SAMP_CHECK(bin.count >= 0 && bin.max_distance >= bin.min_distance)
+        << b.Where() << ": a distance bin needs count >= 0 and max_distance >= min_distance";
+    m.bins.push_back(bin);
+  }
+  f.Read("notes", &m.notes);
+  CheckModel(m, source);
+  return m;
+}
+
+void WriteDetectorNoiseModel(const std::string& path, const DetectorNoiseModel& model) {
+  WriteTextFileAtomically(path, model.ToJson() + "\n");
+}
+
+DetectorNoiseModel ReadDetectorNoiseModel(const std::string& path) {
+  const nlohmann::json j = ReadJsonFile(path);
+  return DetectorNoiseModelFromJson(DumpJson(j), path);
+}
+
+void DetectorNoiseOptions::Check() const {
+  SAMP_CHECK(min_track_detections >= 3) << "DetectorNoiseOptions.min_track_detections must be >= 3";
+  SAMP_CHECK(!bin_edges.empty() && bin_edges.front() >= 0) << "DetectorNoiseOptions.bin_edges must start at >= 0";
+  for (size_t i = 1; i < bin_edges.size(); ++i)
+    SAMP_CHECK(bin_edges[i] > bin_edges[i - 1]) << "DetectorNoiseOptions.bin_edges must increase";
+  SAMP_CHECK(min_bin_count >= 2) << "DetectorNoiseOptions.min_bin_count must be >= 2";
+  SAMP_CHECK(min_samples >= 2) << "DetectorNoiseOptions.min_samples must be >= 2";
+  SAMP_CHECK(smoother_degree == 1 || smoother_degree == 2) << "DetectorNoiseOptions.smoother_degree must be 1 or 2";
+  SAMP_CHECK(trim_sigmas >= 1.5) << "DetectorNoiseOptions.trim_sigmas must be >= 1.5";
+}
+
+DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequences,
+                                         const DetectorNoiseOptions& o, const TrackerOptions& defaults) {
+  o.Check();
+  defaults.Check();
+  DetectorNoiseModel model;
+  model.source = "self-calibration";
+  std::vector<Residual> residuals;
+  long long flips = 0, directed = 0, spanned = 0, missed = 0;
+  long long in_confident = 0, all_detections = 0;
+  for (const LinkedSequence& seq : sequences) {
+    std::map<int, const FrameDetections*> frame_of;
+    for (const FrameDetections& f : seq.frames) frame_of[f.frame] = &f;
+    model.num_frames += static_cast<int>(seq.frames.size());
+    all_detections += seq.num_detections;
+    for (const LinkedTrack& track : seq.tracks) {
+      const int n = static_cast<int>(track.detections.size());
+      if (n < o.min_track_detections) continue;
+      ++model.num_tracks;
+      in_confident += n;
+      std::vector<Eigen::Vector3d> points(n);
+      std::vector<Eigen::Matrix3d> information(n), rotation(n);
+      std::vector<double> times(n), headings(n);
+      for (int i = 0; i < n; ++i) {
+        const ObjectLabel& d = track.detections[i];
+        const auto it = frame_of.find(d.frame);
+        SAMP_CHECK(it != frame_of.end()) << "EstimateDetectorNoise: a track's detection is in frame " << d.frame
+                                         << ", which the sequence does not list";
+        const Eigen::Isometry3d& pose = it->second->world_from_camera;
+        rotation[i] = pose.linear();
+        points[i] = pose * d.position;
+        information[i] = (rotation[i] * DetectionCovariance(d.position, defaults) * rotation[i].transpose()).inverse();
+        times[i] = d.frame / defaults.frame_rate_hz;
+        headings[i] = WorldHeading(d, rotation[i]);
+      }
+      // Interior misses: frames of the sequence within the track's span without its detection.
+      const auto first = frame_of.find(track.detections.front().frame);
+      const auto last = frame_of.find(track.detections.back().frame);
+      const long long span = std::distance(first, last) + 1;
+      spanned += span;
+      missed += span - n;
+
+      const int q = (o.smoother_degree == 2 && n >= 9) ? 3 : 2;
+      const std::vector<Eigen::Vector3d> fitted = SmoothTrack(points, information, times, q);
+      // Residuals of a fit with q parameters per coordinate shrink by (n - q) / n on average.
+      const double position_scale = std::sqrt(double(n) / (n - q));
+      const double one_scale = std::sqrt(double(n) / (n - 1));
+      double median_size[3];
+      for (int k = 0; k < 3; ++k) {
+        std::vector<double> v;
+        for (const ObjectLabel& d : track.detections) v.push_back(k == 0 ? d.height : k == 1 ? d.width : d.length);
+        median_size[k] = Median(v);
+      }
+      // The track's axis: the mean of the doubled angles, then the median difference.
+      double c = 0, s = 0;
+      for (double h : headings) c += std::cos(2 * h), s += std::sin(2 * h);
+      double axis = 0.5 * std::atan2(s, c);
+      std::vector<double> axis_differences;
+      for (double h : headings) axis_differences.push_back(AxisDifference(h, axis));
+      axis += Median(axis_differences);
+      // Its direction: of the motion when the car moves, else of most boxes.
+      const Eigen::Vector3d motion = fitted.back() - fitted.front();
+      const double duration = times.back() - times.front();
+      double direction = axis;
+      const Eigen::Vector2d horizontal(motion.x(), motion.z());
+      if (duration > 0 && horizontal.norm() / duration > 2.0) {
+        const double motion_heading = std::atan2(horizontal.y(), horizontal.x());
+        direction = std::cos(motion_heading - axis) >= 0 ? axis : axis + kPi;
+      } else {
+        int forward = 0;
+        for (double h : headings) forward += std::cos(h - axis) >= 0 ? 1 : -1;
+        direction = forward >= 0 ? axis : axis + kPi;
+      }
+      for (int i = 0; i < n; ++i) {
+        const ObjectLabel& d = track.detections[i];
+        Residual r;
+        const Eigen::Vector3d error_in_camera = rotation[i].transpose() * (points[i] - fitted[i]) * position_scale;
+        Decompose(d.position, error_in_camera, &r);
+        r.size[0] = (d.height - median_size[0]) * one_scale;
+        r.size[1] = (d.width - median_size[1]) * one_scale;
+        r.size[2] = (d.length - median_size[2]) * one_scale;
+        r.has_size = true;
+        r.yaw = AxisDifference(headings[i], axis) * one_scale;
+        r.has_yaw = true;
+        residuals.push_back(r);
+        flips += std::cos(headings[i] - direction) < 0;
+        ++directed;
+      }
+    }
+  }
+  Summarise(residuals, o, /*with_biases=*/false, defaults, &model);
+  model.flip_rate = directed > 0 ? double(flips) / directed : 0.0;
+  model.miss_rate = spanned > 0 ? double(missed) / spanned : 0.0;
+  model.false_positives_per_frame =
+      model.num_frames > 0 ? double(std::max(0LL, all_detections - in_confident)) / model.num_frames : 0.0;
+  model.source = model.num_position_samples >= o.min_samples ? "self-calibration" : "defaults";
+  return model;
+}
+
+DetectorNoiseModel EstimateDetectorNoiseFromTruth(const std::vector<MatchedDetection>& matches, int num_missed,
+                                                  int num_false_positives, int num_frames,
+                                                  const DetectorNoiseOptions& o, const TrackerOptions& defaults) {
+  o.Check();
+  defaults.Check();
+  SAMP_CHECK(num_missed >= 0 && num_false_positives >= 0 && num_frames >= 0)
+      << "EstimateDetectorNoiseFromTruth: negative counts";
+  DetectorNoiseModel model;
+  std::vector<Residual> residuals;
+  std::map<int, int> cars;
+  int flips = 0;
+  for (const MatchedDetection& m : matches) {
+    Residual r;
+    Decompose(m.truth.position, m.detection.position - m.truth.position, &r);
+    r.size[0] = m.detection.height - m.truth.height;
+    r.size[1] = m.detection.width - m.truth.width;
+    r.size[2] = m.detection.length - m.truth.length;
+    r.has_size = true;
+    r.yaw = AxisDifference(m.detection.rotation_y, m.truth.rotation_y);
+    r.has_yaw = true;
+    flips += std::abs(WrapAngle(m.detection.rotation_y - m.truth.rotation_y)) > kPi / 2;
+    residuals.push_back(r);
+    ++cars[m.truth_id];
+  }
+  Summarise(residuals, o, /*with_biases=*/true, defaults, &model);
+  model.source = model.num_position_samples >= o.min_samples ? "ground truth" : "defaults";
+  model.num_tracks = static_cast<int>(cars.size());
+  model.num_frames = num_frames;
+  model.flip_rate = matches.empty() ? 0.0 : double(flips) / matches.size();
+  const double truths = double(matches.size()) + num_missed;
+  model.miss_rate = truths > 0 ? num_missed / truths : 0.0;
+  model.false_positives_per_frame = num_frames > 0 ? double(num_false_positives) / num_frames : 0.0;
+  return model;
+}
+
+void CalibrationOptions::Check() const {
+  noise.Check();
+  SAMP_CHECK(max_iterations >= 1) << "CalibrationOptions.max_iterations must be >= 1";
+  SAMP_CHECK(tolerance > 0) << "CalibrationOptions.tolerance must be > 0";
+  SAMP_CHECK(tracker_sigma_scale >= 1.0) << "CalibrationOptions.tracker_sigma_scale must be >= 1";
+}
+
+std::string CalibrationResult::BriefReport() const {
+  std::ostringstream s;
+  s << "detector self-calibration: " << iterations << " iteration(s), "
+    << (converged ? "converged" : "not converged") << "; " << model.BriefReport();
+  return s.str();
+}
+
+TrackerOptions TrackerForModel(const TrackerOptions& initial, const DetectorNoiseModel& model, double k) {
+  SAMP_CHECK(k > 0) << "TrackerForModel: sigma_scale must be > 0";
+  TrackerOptions next = initial;
+  model.ApplyTo(&next);
+  next.along_sigma_a *= k, next.along_sigma_b *= k, next.across_sigma_a *= k, next.across_sigma_b *= k;
+  next.vertical_sigma_a *= k, next.vertical_sigma_b *= k, next.size_sigma *= k, next.yaw_sigma_deg *= k;
+  next.robust_cues = true;
+  next.Check();
+  return next;
+}
+
+CalibrationResult CalibrateTracker(const std::vector<std::vector<FrameDetections>>& frames_of_sequence,
+                                   const TrackerOptions& initial, const CalibrationOptions& options) {
+  options.Check();
+  initial.Check();
+  CalibrationResult result;
+  result.tracker = initial;
+  result.tracker.robust_cues = true;
+  DetectorNoiseModel previous;
+  bool have_previous = false;
+  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
+    std::vector<LinkedSequence> linked(frames_of_sequence.size());
+    for (size_t s = 0; s < frames_of_sequence.size(); ++s) {
+      linked[s].frames = frames_of_sequence[s];
+      for (const FrameDetections& f : linked[s].frames) linked[s].num_detections += int(f.detections.size());
+      if (linked[s].frames.empty()) continue;
+      linked[s].tracks = LinkDetections(linked[s].frames, result.tracker, nullptr);
+    }
+    // The residuals are weighted by the current model (the tracker's, without its safety scale).
+    TrackerOptions weighting = initial;
+    if (have_previous) previous.ApplyTo(&weighting);
+    DetectorNoiseModel model = EstimateDetectorNoise(linked, options.noise, weighting);
+    // Terms with too few samples keep the user's values, not the previous iteration's.
+    if (model.num_position_samples < options.noise.min_samples) {
+      model.along_sigma_a = initial.along_sigma_a, model.along_sigma_b = initial.along_sigma_b;
+      model.across_sigma_a = initial.across_sigma_a, model.across_sigma_b = initial.across_sigma_b;
+      model.vertical_sigma_a = initial.vertical_sigma_a, model.vertical_sigma_b = initial.vertical_sigma_b;
+    }
+    if (model.num_size_samples < options.noise.min_samples)
+      for (double& s : model.size_sigma) s = initial.size_sigma;
+    if (model.num_yaw_samples < options.noise.min_samples) model.yaw_sigma_deg = initial.yaw_sigma_deg;
+    result.iterations = iteration;
+    result.history.push_back(model.BriefReport());
+    double change = have_previous ? 0.0 : 1e9;
+    if (have_previous) {
+      auto relative = [](double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 1e-3); };
+      // Sigma at 10 and 40 m for the position terms.
+      for (double d : {10.0, 40.0}) {
+        change = std::max(change, relative(model.along_sigma_a + model.along_sigma_b * d,
+                                           previous.along_sigma_a + previous.along_sigma_b * d));
+        change = std::max(change, relative(model.across_sigma_a + model.across_sigma_b * d,
+                                           previous.across_sigma_a + previous.across_sigma_b * d));
+        change = std::max(change, relative(model.vertical_sigma_a + model.vertical_sigma_b * d,
+                                           previous.vertical_sigma_a + previous.vertical_sigma_b * d));
+      }
+      for (int i = 0; i < 3; ++i) change = std::max(change, relative(model.size_sigma[i], previous.size_sigma[i]));
+      change = std::max(change, relative(model.yaw_sigma_deg, previous.yaw_sigma_deg));
+    }
+    previous = model;
+    have_previous = true;
+    result.tracker = TrackerForModel(initial, model, options.tracker_sigma_scale);
+    result.model = model;
+    if (change < options.tolerance) {
+      result.converged = true;
+      break;
+    }
+  }
+  return result;
+}
+
+void DetectorCalibrationOptions::Check() const {
+  SAMP_CHECK(!sequences.empty()) << "DetectorCalibrationOptions.sequences is empty (give at least one --seq)";
+  SAMP_CHECK(truth_labels.empty() || truth_labels.size() == sequences.size())
+      << "DetectorCalibrationOptions.truth_labels: " << truth_labels.size() << " files for " << sequences.size()
+      << " sequences (give none or one per sequence)";
+  SAMP_CHECK(match_distance > 0) << "DetectorCalibrationOptions.match_distance must be > 0";
+  sequence.Check();
+  noise.Check();
+  defaults.Check();
+}
+
+std::string DetectorCalibrationSummary::BriefReport() const {
+  std::ostringstream s;
+  s << num_frames << " frames: " << num_detections << " detections, " << num_truths << " true boxes, "
+    << num_matched << " matched";
+  return s.str();
+}
+
+DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& options,
+                                              DetectorCalibrationSummary* summary) {
+  options.Check();
+  DetectorCalibrationSummary local;
+  DetectorCalibrationSummary& result = summary != nullptr ? *summary : local;
+  result = DetectorCalibrationSummary();
+  std::vector<MatchedDetection> matches;
+  int num_missed = 0, num_false_positives = 0;
+  for (size_t s = 0; s < options.sequences.size(); ++s) {
+    const SequenceReader reader(options.sequences[s], options.sequence);
+    const SequenceFiles& files = reader.files();
+    const std::string labels_path = options.truth_labels.empty()
+                                        ? SequenceLayout(files.directory, files.name).GroundTruthLabels()
+                                        : options.truth_labels[s];
+    std::map<int, std::vector<ObjectLabel>> truth_of_frame;
+    std::map<int, int> index_of_frame;
+    for (int i = 0; i < reader.num_frames(); ++i) index_of_frame[files.frames[i].frame] = i;
+    auto in_range = [&](int frame) {
+      return (options.sequence.first_frame < 0 || frame >= options.sequence.first_frame) &&
+             (options.sequence.last_frame < 0 || frame <= options.sequence.last_frame);
+    };
+    for (const ObjectLabel& label : ReadTrackingLabels(labels_path)) {
+      if (SameObjectType(label.type, "DontCare")) continue;
+      bool kept = false;
+      for (const std::string& type : options.sequence.object_types) kept = kept || SameObjectType(label.type, type);
+      if (!kept || !in_range(label.frame)) continue;
+      SAMP_CHECK(index_of_frame.count(label.frame) > 0)
+          << labels_path << ": a label in frame " << label.frame << ", which sequence " << options.sequences[s]
+          << " does not have (mismatched label file?)";
+      truth_of_frame[label.frame].push_back(label);
+    }
+    for (const auto& [frame, index] : index_of_frame) {
+      if (!in_range(frame)) continue;
+      ++result.num_frames;
+      const std::vector<ObjectLabel> detections = reader.ReadDetections(index);
+      const std::vector<ObjectLabel>& truths = truth_of_frame[frame];
+      result.num_detections += int(detections.size());
+      result.num_truths += int(truths.size());
+      const int rows = int(detections.size()), cols = int(truths.size());
+      std::vector<double> cost(size_t(rows) * cols, kNoAssignment);
+      for (int r = 0; r < rows; ++r)
+        for (int c = 0; c < cols; ++c) {
+          const Eigen::Vector3d d = detections[r].position - truths[c].position;
+          const double horizontal = std::hypot(d.x(), d.z());
+          if (horizontal <= options.match_distance) cost[size_t(r) * cols + c] = horizontal;
+        }
+      const std::vector<int> assignment = SolveAssignment(cost, rows, cols);
+      int matched = 0;
+      for (int r = 0; r < rows; ++r) {
+        if (assignment[r] < 0) continue;
+        MatchedDetection m;
+        m.detection = detections[r];
+        m.truth = truths[assignment[r]];
+        m.truth_id = int(s) * 1000000 + m.truth.track_id;
+        matches.push_back(m);
+        ++matched;
+      }
+      num_false_positives += rows - matched;
+      num_missed += cols - matched;
+    }
+  }
+  result.num_matched = int(matches.size());
+  SAMP_CHECK(result.num_matched >= options.noise.min_samples)
+      << "calibrate-detector: only " << result.num_matched << " detection(s) match a true box within "
+      << options.match_distance << " m (" << result.BriefReport() << "); at least " << options.noise.min_samples
+      << " are needed: give more sequences, or check that the labels belong to the sequences";
+  return EstimateDetectorNoiseFromTruth(matches, num_missed, num_false_positives, result.num_frames, options.noise,
+                                        options.defaults);
+}
+
+}  // namespace samp

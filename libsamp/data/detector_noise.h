@@ -1,0 +1,188 @@
+// The detector's noise model, measured from the data (docs/detector_calibration.md):
+// how a 3D car detector errs in the bottom centre (along the horizontal viewing
+// ray, across it, vertically; each a function of the distance), in each box
+// dimension, in yaw modulo 180 degrees, and how often it flips a box, misses a
+// car or fires without one.
+//
+// Two estimators fill the same DetectorNoiseModel:
+//  - EstimateDetectorNoise: self-calibration from linked tracks, no ground
+//    truth. Each confident track is smoothed over the whole sequence (samp is
+//    offline): a robust (iteratively reweighted, Tukey) polynomial in time of
+//    the bottom centre in the world, the median box, the mean axis; its
+//    detections' residuals give the sigmas. Biases are not observable this way
+//    (they are reported as 0 and `biases_estimated` is false).
+//  - EstimateDetectorNoiseFromTruth: detections matched to ground-truth boxes
+//    (`samp calibrate-detector`): sigmas and biases.
+// Both use robust statistics: a median centre and a 3-sigma trimmed standard
+// deviation started from the MAD, corrected for the trimming, so flips,
+// misses, false positives and wrong boxes do not inflate the sigmas.
+// CalibrateTracker links, estimates and re-links to a fixed point.
+//
+// The model's JSON (WriteDetectorNoiseModel / ReadDetectorNoiseModel) is owned
+// here: {"format": "samp-detector-model", "version": 1, ...}; every field is
+// checked when read and errors name the file and the key.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "libsamp/data/sequence.h"
+#include "libsamp/data/tracking.h"
+
+namespace samp {
+
+// Residual statistics of one distance bin [min_distance, max_distance) (m).
+struct DistanceBin {
+  double min_distance = 0.0, max_distance = 0.0;
+  int count = 0;  // detections in the bin
+  // Robust std. dev. and bias (median) of the position error (m).
+  double along_sigma = 0.0, across_sigma = 0.0, vertical_sigma = 0.0;
+  double along_bias = 0.0, across_bias = 0.0, vertical_bias = 0.0;
+};
+
+struct DetectorNoiseModel {
+  static constexpr int kVersion = 1;
+  // "self-calibration", "ground truth" or "defaults" (too few samples).
+  std::string source = "defaults";
+  // Position error std. dev. (m) at horizontal distance d: along the ray
+  // along_sigma_a + along_sigma_b d, across it across_sigma_a + across_sigma_b
+  // d, vertically vertical_sigma_a + vertical_sigma_b d (TrackerOptions' form).
+  double along_sigma_a = 0.25, along_sigma_b = 0.015;
+  double across_sigma_a = 0.1, across_sigma_b = 0.005;
+  double vertical_sigma_a = 0.2, vertical_sigma_b = 0.002;
+  // Median position error along the ray (m; ground truth only).
+  double along_bias = 0.0;
+  // Per box dimension h, w, l: std. dev. and bias (detected - true, m).
+  double size_sigma[3] = {0.3, 0.3, 0.3};
+  double size_bias[3] = {0.0, 0.0, 0.0};
+  // Std. dev. of the yaw error modulo 180 degrees (deg).
+  double yaw_sigma_deg = 10.0;
+  // Share of detections turned by 180 degrees; share of a car's frames
+  // without its detection; false positives per frame.
+  double flip_rate = 0.0, miss_rate = 0.0, false_positives_per_frame = 0.0;
+  bool biases_estimated = false;
+  // Sample counts: detections used for the position, size and yaw terms,
+  // tracks (or true cars), frames.
+  int num_position_samples = 0, num_size_samples = 0, num_yaw_samples = 0;
+  int num_tracks = 0, num_frames = 0;
+  std::vector<DistanceBin> bins;
+  // Why a term kept its default ("too few ...").
+  std::vector<std::string> notes;
+
+  // Root mean square of the three size sigmas (the tracker's and the fitter's single size sigma).
+  double MeanSizeSigma() const;
+  // Sets the detector noise fields of `tracker` (the sigmas; the gates and the
+  // motion model stay).
+  void ApplyTo(TrackerOptions* tracker) const;
+  std::string BriefReport() const;
+  std::string ToJson() const;  // the file's contents
+};
+
+// Throws samp::Error naming `source` (a file) and the key when the JSON is
+// malformed, of another format or version, or a value is out of range.
+DetectorNoiseModel DetectorNoiseModelFromJson(const std::string& text, const std::string& source);
+void WriteDetectorNoiseModel(const std::string& path, const DetectorNoiseModel& model);
+DetectorNoiseModel ReadDetectorNoiseModel(const std::string& path);
+
+struct DetectorNoiseOptions {
+  // Tracks with fewer detections are not used (smoothing needs a few).
+  int min_track_detections = 6;
+  // Distance bin edges (m), increasing; the last bin is open.
+  std::vector<double> bin_edges = {0, 10, 20, 30, 40, 60};
+  // A bin with fewer detections does not enter the sigma(d) fit.
+  int min_bin_count = 10;
+  // Fewer samples for a term: that term keeps its default, with a note.
+  int min_samples = 30;
+  // Degree of the robust smoother of a track's bottom centre in time (1 =
+  // constant velocity, 2 = constant acceleration for tracks of at least
+  // 3 x (degree + 1) detections).
+  int smoother_degree = 2;
+  // Cut-off of the residuals (robust sigmas) that enter the trimmed statistics.
+  double trim_sigmas = 3.0;
+
+  void Check() const;  // throws samp::Error naming the field
+};
+
+// The detections and linked tracks of one sequence, for EstimateDetectorNoise.
+struct LinkedSequence {
+  std::vector<FrameDetections> frames;   // every frame, with its ego pose
+  std::vector<LinkedTrack> tracks;
+  int num_detections = 0;                // all detections of the frames (tracks or not)
+};
+
+// Self-calibration from linked tracks of one or more sequences (pooled).
+// `defaults` gives each term's value when it has too few samples (noted).
+DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequences,
+                                         const DetectorNoiseOptions& options, const TrackerOptions& defaults);
+
+// A detection and its true box (camera frame of its frame); truth_id groups a car.
+struct MatchedDetection {
+  ObjectLabel detection, truth;
+  int truth_id = 0;
+};
+
+// Calibration against ground truth: `matches` are detections with their true
+// boxes, `num_missed` true boxes without a detection, `num_false_positives`
+// detections without a true box, over `num_frames` frames.
+DetectorNoiseModel EstimateDetectorNoiseFromTruth(const std::vector<MatchedDetection>& matches, int num_missed,
+                                                  int num_false_positives, int num_frames,
+                                                  const DetectorNoiseOptions& options,
+                                                  const TrackerOptions& defaults);
+
+// Self-calibrating tracking: link with robust cues (and `initial`'s sigmas),
+// estimate the noise model from all sequences, re-link with it, until the
+// sigmas change by less than `tolerance` (relative) or after max_iterations.
+struct CalibrationOptions {
+  DetectorNoiseOptions noise;
+  int max_iterations = 4;
+  double tolerance = 0.05;
+  // The tracker's sigmas are the estimate times this (>= 1: the tracker's
+  // filter assumes white noise, a detector's errors are correlated in time).
+  double tracker_sigma_scale = 1.25;
+  void Check() const;
+};
+
+struct CalibrationResult {
+  DetectorNoiseModel model;
+  TrackerOptions tracker;  // `initial` with the estimate applied and robust_cues on
+  int iterations = 0;
+  bool converged = false;
+  std::vector<std::string> history;  // one BriefReport per iteration
+  std::string BriefReport() const;
+};
+
+// The tracker for a noise model: `initial` with the model's sigmas times
+// `sigma_scale` and robust cues on.
+TrackerOptions TrackerForModel(const TrackerOptions& initial, const DetectorNoiseModel& model, double sigma_scale);
+
+// `frames_of_sequence`: every sequence's frames (detections and ego poses).
+CalibrationResult CalibrateTracker(const std::vector<std::vector<FrameDetections>>& frames_of_sequence,
+                                   const TrackerOptions& initial, const CalibrationOptions& options);
+
+// `samp calibrate-detector`: the detections of sequence directories
+// (detections/, the sequence layout) matched to ground-truth tracking labels
+// (KITTI label_02 format) frame by frame: a minimum-cost assignment on the
+// horizontal distance of the bottom centres, pairs within match_distance.
+struct DetectorCalibrationOptions {
+  std::vector<std::string> sequences;
+  // One KITTI tracking label file per sequence; empty = SEQ/gt/label_02/<seq>.txt.
+  std::vector<std::string> truth_labels;
+  SequenceOptions sequence;      // object types, minimum score, frame range
+  double match_distance = 3.0;   // m
+  DetectorNoiseOptions noise;
+  TrackerOptions defaults;       // the values of terms with too few samples
+  void Check() const;            // throws samp::Error naming the field
+};
+
+struct DetectorCalibrationSummary {
+  int num_detections = 0, num_truths = 0, num_matched = 0, num_frames = 0;
+  std::string BriefReport() const;
+};
+
+// Throws samp::Error naming the file when a sequence or label file cannot be
+// read, a label file has labels in frames its sequence does not have
+// (mismatched files), or fewer than noise.min_samples detections match.
+DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& options,
+                                              DetectorCalibrationSummary* summary = nullptr);
+
+}  // namespace samp

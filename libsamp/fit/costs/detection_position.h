@@ -1,0 +1,55 @@
+// The detector's box position as an observation of the pose (samp addition,
+// not in the paper; docs/fitting.md, "Detected position"): a 3D detector measures each car's bottom centre p_det
+// with covariance Sigma (world frame; TrackFrame::detection_covariance, the
+// detector noise model the tracker gates with), so
+//   E_position = w * (t - p_det)^T Sigma^-1 (t - p_det),
+//   residual = sqrt(w) U (t - p_det),  U^T U = Sigma^-1 (Cholesky),
+//   d residual / d(t, theta) = sqrt(w) (U, 0).
+// The term is what keeps a partly hidden or weakly textured car where the
+// detector saw it when its few visible points fit a shape in several places
+// (the visible top of a car behind another fits a shape with its cabin moved
+// along the body as well as the true one).
+// Parameter block: pose (tx, ty, tz, theta).
+#pragma once
+
+#include <ceres/sized_cost_function.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <cmath>
+
+namespace samp {
+
+class DetectionPositionCost : public ceres::SizedCostFunction<3, 4> {
+ public:
+  // `covariance_in_world` must be symmetric positive definite.
+  DetectionPositionCost(const Eigen::Vector3d& detected_position_in_world, const Eigen::Matrix3d& covariance_in_world,
+                        double weight)
+      : detected_(detected_position_in_world) {
+    const Eigen::Matrix3d information = covariance_in_world.inverse();
+    sqrt_information_ = std::sqrt(weight) * Eigen::Matrix3d(information.llt().matrixU());
+  }
+
+  static ceres::CostFunction* Create(const Eigen::Vector3d& detected_position_in_world,
+                                     const Eigen::Matrix3d& covariance_in_world, double weight) {
+    return new DetectionPositionCost(detected_position_in_world, covariance_in_world, weight);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {
+    const Eigen::Map<const Eigen::Vector3d> t(parameters[0]);
+    Eigen::Map<Eigen::Vector3d> r(residuals);
+    r = sqrt_information_ * (t - detected_);
+    if (jacobians && jacobians[0]) {
+      Eigen::Map<Eigen::Matrix<double, 3, 4, Eigen::RowMajor>> j(jacobians[0]);
+      j.leftCols<3>() = sqrt_information_;
+      j.col(3).setZero();
+    }
+    return true;
+  }
+
+ private:
+  Eigen::Vector3d detected_;
+  Eigen::Matrix3d sqrt_information_;
+};
+
+}  // namespace samp

@@ -1,0 +1,110 @@
+#include "libsamp/fit/costs/disparity.h"
+
+#include <cmath>
+
+#include "libsamp/core/error.h"
+#include "libsamp/fit/costs/shape_ray.h"
+
+namespace samp {
+
+namespace {
+
+// The camera centre in the object frame of pose (rotation (c, s) = R_y(theta)).
+void CameraInObject(const Eigen::Vector3d& camera, const double* pose, double c, double s, double* o_cam) {
+  const double dx = camera[0] - pose[0], dy = camera[1] - pose[1], dz = camera[2] - pose[2];
+  o_cam[0] = c * dx - s * dz;
+  o_cam[1] = dy;
+  o_cam[2] = s * dx + c * dz;
+}
+
+}  // namespace
+
+DisparityCost::DisparityCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
+                             const std::vector<double>& sigmas, const DataCostOptions& options)
+    : DataCost(lookup, points_in_world, sigmas, options, /*with_rays=*/true) {
+  SAMP_CHECK(options.focal_px > 0.0 && std::isfinite(options.focal_px))
+      << "DisparityCost: focal_px must be > 0, got " << options.focal_px;
+  SAMP_CHECK(options.silhouette_sigma_px > 0.0) << "DisparityCost: silhouette_sigma_px must be > 0";
+  SAMP_CHECK(options.outlier_threshold > 0.0) << "DisparityCost: outlier_threshold must be > 0";
+  SAMP_CHECK(std::abs(options.camera_axis_in_world.norm() - 1.0) < 1e-6)
+      << "DisparityCost: camera_axis_in_world must be a unit vector";
+  const size_t n = points_in_world.size();
+  ray_lengths_.resize(n);
+  axis_cosines_.resize(n);
+  inv_silhouette_sigmas_.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d ray = points_in_world[i] - options.camera_in_world;
+    ray_lengths_[i] = ray.norm();
+    axis_cosines_[i] = ray.dot(options.camera_axis_in_world) / ray_lengths_[i];
+    SAMP_CHECK(axis_cosines_[i] > 1e-3) << "DisparityCost: point " << i << " is not in front of the camera";
+    const double depth = axis_cosines_[i] * ray_lengths_[i];
+    inv_silhouette_sigmas_[i] = options.focal_px / (depth * options.silhouette_sigma_px);
+  }
+}
+
+RayResidual DisparityCost::Residual(int i, const double* phi_z, const double* o_cam, const double* u, double* m,
+                                    double* c, double* g, double* dz_row) const {
+  RayResidual out;
+  double lambda = 0.0, g_c[3], phi_min = 0.0;
+  out.hit = FirstCrossing(*lookup_, phi_z, o_cam, u, &lambda, c, g_c, &phi_min);
+  if (out.hit) {
+    const double li = ray_lengths_[i], a = axis_cosines_[i], inv_sigma = inv_sigmas_[i];
+    double slope = g_c[0] * u[0] + g_c[1] * u[1] + g_c[2] * u[2];
+    if (!(slope < -kMinRaySlope)) {
+      // Grazing: the crossing moves fast with the parameters; its derivative
+      // is taken with the slope clamped (a Gauss-Newton approximation).
+      out.grazing = true;
+      slope = -kMinRaySlope;
+    }
+    out.value = a * li * (lambda - li) / lambda * inv_sigma;
+    *m = -a * li * li / (lambda * lambda) * inv_sigma / slope;
+  } else {
+    out.value = phi_min * inv_silhouette_sigmas_[i];
+    *m = inv_silhouette_sigmas_[i];
+  }
+  if (g) {
+    for (int k = 0; k < 3; ++k) g[k] = g_c[k];
+  }
+  if (dz_row) lookup_->EvaluateDense(phi_z, c, nullptr, dz_row);
+  return out;
+}
+
+bool DisparityCost::EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals,
+                                 double* jz, int jz_stride, double* jp, int jp_stride) const {
+  const int nr = lookup_->num_components();
+  const double c = std::cos(pose[3]), s = std::sin(pose[3]);
+  const double* phi_z = lookup_->DenseCached(z);
+  double o_cam[3];
+  CameraInObject(camera_, pose, c, s, o_cam);
+  for (int row = 0; row < end - begin; ++row) {
+    const int i = begin + row;
+    const double* w = &rays_[3 * i];
+    const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
+    double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
+    double m, o[3], g[3];
+    const RayResidual ray = Residual(i, phi_z, o_cam, u, &m, o, jp ? g : nullptr, dz_row);
+    if (!std::isfinite(ray.value)) return false;
+    double d_psi = 1.0;
+    residuals[row] = sqrt_weight_ * MixturePsi(ray.value, outlier_threshold_, &d_psi);
+    const double f = sqrt_weight_ * d_psi * m;
+    WriteJacobianRow(f, c, s, g, o, nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
+  }
+  return true;
+}
+
+std::vector<RayResidual> DisparityCost::RayResiduals(const double* z, const double* pose) const {
+  const double c = std::cos(pose[3]), s = std::sin(pose[3]);
+  const double* phi_z = lookup_->DenseCached(z);
+  double o_cam[3];
+  CameraInObject(camera_, pose, c, s, o_cam);
+  std::vector<RayResidual> out(static_cast<size_t>(num_residuals()));
+  for (int i = 0; i < num_residuals(); ++i) {
+    const double* w = &rays_[3 * i];
+    const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
+    double m, o[3];
+    out[size_t(i)] = Residual(i, phi_z, o_cam, u, &m, o, nullptr, nullptr);
+  }
+  return out;
+}
+
+}  // namespace samp

@@ -1,0 +1,179 @@
+#include "libsamp/fit/costs/shape_ray.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace samp {
+
+namespace {
+
+// RayDistance: at most this many sphere-tracing steps, each at least half a
+// voxel; Newton steps on the bracketed crossing; at most kMaxRayRatio |phi|.
+constexpr int kMaxMarchSteps = 24;
+constexpr int kNewtonSteps = 3;
+constexpr double kMaxRayRatio = 5.0;
+// FirstCrossing: at most this many sphere-tracing steps from the grid box
+// entry; golden-section steps refining a miss's closest approach.
+constexpr int kMaxTraceSteps = 64;
+constexpr int kGoldenSteps = 16;
+
+void PointOnRay(const double* origin, const double* direction, double t, double* p) {
+  for (int a = 0; a < 3; ++a) p[a] = origin[a] + t * direction[a];
+}
+
+// The crossing of origin + t direction bracketed in [lo, hi] (phi v_lo at lo
+// and v_hi at hi on either side of 0): a secant, then Newton steps kept
+// inside the bracket until |phi| is negligible. c, g_c and *v are those of
+// the returned t.
+double RefineCrossing(const ShapeLookup& lookup, const double* phi_z, const double* origin,
+                      const double* direction, double lo, double hi, double v_lo, double v_hi, double* c,
+                      double* g_c, double* v) {
+  double t = lo + (hi - lo) * v_lo / (v_lo - v_hi);
+  const double tolerance = 1e-9 * lookup.grid().voxel_size;
+  for (int k = 0;; ++k) {
+    PointOnRay(origin, direction, t, c);
+    *v = lookup.EvaluateDense(phi_z, c, g_c, nullptr);
+    const double slope = g_c[0] * direction[0] + g_c[1] * direction[1] + g_c[2] * direction[2];
+    if (k == kNewtonSteps || std::abs(*v) <= tolerance || slope == 0.0 || !std::isfinite(slope)) break;
+    t = std::min(std::max(t - *v / slope, lo), hi);
+  }
+  return t;
+}
+
+// The span [*enter, *leave] of o_cam + lambda u (lambda >= 0) inside the grid
+// box; false when the ray passes it.
+bool GridBoxSpan(const GridSpec& grid, const double* o_cam, const double* u, double* enter, double* leave) {
+  const Eigen::Vector3d lo = grid.MinCorner(), hi = grid.MaxCorner();
+  *enter = 0.0;
+  *leave = std::numeric_limits<double>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(u[a]) < 1e-12) {
+      if (o_cam[a] < lo[a] || o_cam[a] > hi[a]) *enter = *leave + 1.0;
+      continue;
+    }
+    double t0 = (lo[a] - o_cam[a]) / u[a], t1 = (hi[a] - o_cam[a]) / u[a];
+    if (t0 > t1) std::swap(t0, t1);
+    *enter = std::max(*enter, t0);
+    *leave = std::min(*leave, t1);
+  }
+  return *enter <= *leave;
+}
+
+// Golden-section search for the smallest phi along the ray in [a, b]; the
+// best lambda found, *best_phi its phi (or `fallback` and its phi when the
+// search finds nothing below it).
+double ClosestApproach(const ShapeLookup& lookup, const double* phi_z, const double* o_cam, const double* u,
+                       double a, double b, double fallback, double fallback_phi) {
+  auto phi_at = [&](double l) {
+    double p[3];
+    PointOnRay(o_cam, u, l, p);
+    return lookup.EvaluateDense(phi_z, p, nullptr, nullptr);
+  };
+  if (!(b > a)) return fallback;
+  constexpr double kInvPhi = 0.6180339887498949;
+  double x1 = b - kInvPhi * (b - a), x2 = a + kInvPhi * (b - a);
+  double f1 = phi_at(x1), f2 = phi_at(x2);
+  for (int k = 0; k < kGoldenSteps; ++k) {
+    if (f1 < f2) {
+      b = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = b - kInvPhi * (b - a);
+      f1 = phi_at(x1);
+    } else {
+      a = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = a + kInvPhi * (b - a);
+      f2 = phi_at(x2);
+    }
+  }
+  const double x = f1 < f2 ? x1 : x2;
+  return std::min(f1, f2) < fallback_phi ? x : fallback;
+}
+
+}  // namespace
+
+bool RayDistance(const ShapeLookup& lookup, const double* phi_z, const double* o, double phi_o, const double* u,
+                 double* distance, double* c, double* g_c) {
+  const double min_step = 0.5 * lookup.grid().voxel_size;
+  const double sign = phi_o < 0.0 ? -1.0 : 1.0;  // inside: towards the camera
+  const double direction[3] = {sign * u[0], sign * u[1], sign * u[2]};
+  auto same_side = [&](double v) { return sign < 0.0 ? v < 0.0 : v > 0.0; };
+  // Sphere tracing: |phi| bounds the distance to the surface.
+  double lo = 0.0, phi_lo = phi_o, hi = 0.0, phi_hi = phi_o;
+  const double limit = kMaxRayRatio * std::abs(phi_o);
+  for (int k = 0; k < kMaxMarchSteps && same_side(phi_hi) && hi <= limit; ++k) {
+    lo = hi;
+    phi_lo = phi_hi;
+    hi = lo + std::max(std::abs(phi_lo), min_step);
+    PointOnRay(o, direction, hi, c);
+    phi_hi = lookup.EvaluateDense(phi_z, c, nullptr, nullptr);
+    if (!std::isfinite(phi_hi)) return false;
+  }
+  if (same_side(phi_hi)) return false;
+  double v;
+  const double d = RefineCrossing(lookup, phi_z, o, direction, lo, hi, phi_lo, phi_hi, c, g_c, &v);
+  if (d > limit) return false;
+  // A crossing at a grazing angle (or none after all) counts as a miss.
+  if (!(g_c[0] * u[0] + g_c[1] * u[1] + g_c[2] * u[2] < -kMinRaySlope)) return false;
+  *distance = d;
+  return true;
+}
+
+bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double* o_cam, const double* u,
+                   double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss) {
+  const GridSpec& grid = lookup.grid();
+  auto finish_miss = [&](double l) {
+    *lambda = l;
+    PointOnRay(o_cam, u, l, c);
+    *phi_min = lookup.EvaluateDense(phi_z, c, g_c, nullptr);
+    return false;
+  };
+  double enter, leave;
+  if (!GridBoxSpan(grid, o_cam, u, &enter, &leave)) {
+    // The ray passes the grid box: its closest approach to the box centre.
+    const Eigen::Vector3d centre = 0.5 * (grid.MinCorner() + grid.MaxCorner());
+    double l = 0.0;
+    for (int a = 0; a < 3; ++a) l += (centre[a] - o_cam[a]) * u[a];
+    return finish_miss(std::max(l, 0.0));
+  }
+  // Sphere tracing from the entry: |phi| bounds the distance to the surface.
+  const double min_step = 0.5 * grid.voxel_size;
+  double ls[kMaxTraceSteps + 1], vs[kMaxTraceSteps + 1];
+  int count = 0;
+  double l = enter;
+  for (;;) {
+    double p[3];
+    PointOnRay(o_cam, u, l, p);
+    const double v = lookup.EvaluateDense(phi_z, p, nullptr, nullptr);
+    if (!std::isfinite(v)) {
+      *phi_min = v;
+      return false;
+    }
+    ls[count] = l;
+    vs[count] = v;
+    ++count;
+    if (v < 0.0) break;
+    if (l >= leave || count > kMaxTraceSteps) break;
+    l = std::min(l + std::max(v, min_step), leave);
+  }
+  if (vs[count - 1] < 0.0 && count >= 2) {
+    // Crossing bracketed in [ls[count-2], ls[count-1]].
+    *lambda = RefineCrossing(lookup, phi_z, o_cam, u, ls[count - 2], ls[count - 1], vs[count - 2], vs[count - 1],
+                             c, g_c, phi_min);
+    return true;
+  }
+  if (vs[count - 1] < 0.0) return finish_miss(ls[0]);  // inside at the box entry (a shape touching the box)
+  if (!refine_miss) return false;
+  // Miss: the smallest sampled phi, refined in the neighbouring samples' interval.
+  int best = 0;
+  for (int k = 1; k < count; ++k) {
+    if (vs[k] < vs[best]) best = k;
+  }
+  const double a = ls[std::max(best - 1, 0)], b = ls[std::min(best + 1, count - 1)];
+  return finish_miss(ClosestApproach(lookup, phi_z, o_cam, u, a, b, ls[best], vs[best]));
+}
+
+}  // namespace samp

@@ -1,0 +1,40 @@
+// Where a ray meets the shape's surface phi_z = 0 (samp addition: the paper's
+// data term needs no ray). Shared by the ray terms (ray_depth.h, disparity.h);
+// everything in the object frame, phi_z the lookup's dense grid of z
+// (ShapeLookup::DenseCached), u a unit direction.
+//   RayDistance:   from a point o, the distance d >= 0 along +u (phi(o) > 0)
+//                  or -u (phi(o) < 0) to the first crossing, searched up to
+//                  kMaxRayRatio |phi(o)|: sphere tracing (|phi| bounds the
+//                  distance to the surface, steps >= half a voxel), then a
+//                  secant and Newton steps in the bracket.
+//   FirstCrossing: from the camera o_cam, the first crossing lambda_s of
+//                  o_cam + lambda u from the grid box entry (the surface the
+//                  camera sees on that pixel); when the ray misses the shape,
+//                  its closest approach lambda* = argmin phi along the ray
+//                  (sampled, refined by golden-section search).
+// A crossing with grad phi . u > -kMinRaySlope grazes the surface: its
+// distance moves fast with the parameters.
+#pragma once
+
+#include "libsamp/model/shape_lookup.h"
+
+namespace samp {
+
+constexpr double kMinRaySlope = 0.05;
+
+// Distance from o along u to the surface: towards the camera (-u) from inside
+// (phi_o < 0), away from it from outside; the crossing c and grad phi there.
+// False when none is found within kMaxRayRatio |phi_o| or the ray grazes the
+// surface.
+bool RayDistance(const ShapeLookup& lookup, const double* phi_z, const double* o, double phi_o, const double* u,
+                 double* distance, double* c, double* g_c);
+
+// The first crossing of the ray o_cam + lambda u with the surface, from the
+// grid box entry. Hit: *lambda = lambda_s, c and grad phi at c, true (the
+// caller clamps a grazing slope). Miss: *lambda = lambda* of the smallest phi
+// along the ray (c, g_c there, *phi_min = phi(c)), false; without refine_miss
+// a miss that needs the search returns false at once (c, g_c, *phi_min unset).
+bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double* o_cam, const double* u,
+                   double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss = true);
+
+}  // namespace samp

@@ -1,0 +1,262 @@
+#include "libsamp/synth/detector_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+
+#include "libsamp/core/error.h"
+#include "libsamp/core/pose.h"
+#include "libsamp/synth/procedural.h"
+
+namespace samp {
+namespace {
+
+// Two-state Markov chain with stationary probability p of the "on" state and
+// mean run length L frames of that state: P(on -> off) = 1 / L,
+// P(off -> on) = p / (1 - p) / L. L = 0: independent draws.
+struct MarkovRates {
+  double enter = 0.0, exit = 1.0;
+};
+
+MarkovRates Rates(double p, double mean_run) {
+  MarkovRates r;
+  if (mean_run <= 0.0 || p <= 0.0 || p >= 1.0) {
+    r.enter = p;
+    r.exit = 1.0 - p;
+  } else {
+    r.exit = 1.0 / mean_run;
+    r.enter = p / (1.0 - p) / mean_run;
+  }
+  return r;
+}
+
+}  // namespace
+
+void DetectorModelOptions::Check() const {
+  auto non_negative = [](double value, const char* name) {
+    SAMP_CHECK(std::isfinite(value) && value >= 0.0) << "detector model: " << name << " must be >= 0 (is "
+                                                     << value << ")";
+  };
+  non_negative(ray_sigma_a, "ray_sigma_a");
+  non_negative(ray_sigma_b, "ray_sigma_b");
+  non_negative(ray_sigma_c, "ray_sigma_c");
+  non_negative(lateral_sigma_a, "lateral_sigma_a");
+  non_negative(lateral_sigma_b, "lateral_sigma_b");
+  non_negative(vertical_sigma, "vertical_sigma");
+  non_negative(size_sigma, "size_sigma");
+  non_negative(relative_size_sigma, "relative_size_sigma");
+  non_negative(yaw_sigma_deg_a, "yaw_sigma_deg_a");
+  non_negative(yaw_sigma_deg_b, "yaw_sigma_deg_b");
+  non_negative(correlation_frames, "correlation_frames");
+  non_negative(false_positives_per_frame, "false_positives_per_frame");
+  non_negative(box_sigma_px, "box_sigma_px");
+  SAMP_CHECK(flip_probability >= 0.0 && flip_probability < 1.0)
+      << "detector model: flip_probability must be in [0, 1)";
+  SAMP_CHECK(miss_probability >= 0.0 && miss_probability < 1.0)
+      << "detector model: miss_probability must be in [0, 1)";
+  for (const auto& [p, run, name] :
+       {std::tuple{flip_probability, flip_mean_run_frames, "flip_mean_run_frames"},
+        std::tuple{miss_probability, miss_mean_run_frames, "miss_mean_run_frames"}}) {
+    SAMP_CHECK(run == 0.0 || (run >= 1.0 && run >= p / (1.0 - p)))
+        << "detector model: " << name << " must be 0 (independent) or >= max(1, p / (1 - p)) frames (is "
+        << run << ")";
+  }
+  SAMP_CHECK(false_positive_mean_run_frames >= 1.0)
+      << "detector model: false_positive_mean_run_frames must be >= 1";
+  SAMP_CHECK(min_pixels >= 0) << "detector model: min_pixels must be >= 0";
+}
+
+struct StereoDetectorModel::TrackState {
+  explicit TrackState(uint64_t seed) : engine(seed) {}
+  std::mt19937_64 engine;
+  int last_frame = 0;
+  bool started = false;
+  // Standardised AR(1) states: along ray, lateral, vertical, h, w, l, yaw.
+  double ar[7] = {0, 0, 0, 0, 0, 0, 0};
+  bool flipped = false, missed = false;
+};
+
+StereoDetectorModel::StereoDetectorModel(const DetectorModelOptions& options, uint64_t seed)
+    : options_(options), seed_(seed), clutter_engine_(procedural::Mix(seed, 0xC177u)) {
+  options_.Check();
+}
+
+StereoDetectorModel::~StereoDetectorModel() = default;
+
+StereoDetectorModel::TrackState& StereoDetectorModel::State(int track_id) {
+  auto it = tracks_.find(track_id);
+  if (it == tracks_.end()) {
+    it = tracks_.emplace(track_id, std::make_unique<TrackState>(procedural::Mix(seed_, uint64_t(track_id) + 17)))
+             .first;
+  }
+  return *it->second;
+}
+
+bool StereoDetectorModel::Detect(int track_id, int frame, const ObjectLabel& truth, int visible_pixels,
+                                 const PinholeCamera& camera, ObjectLabel* detection,
+                                 DetectionError* error) {
+  TrackState& s = State(track_id);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const MarkovRates flip = Rates(options_.flip_probability, options_.flip_mean_run_frames);
+  const MarkovRates miss = Rates(options_.miss_probability, options_.miss_mean_run_frames);
+  if (!s.started) {
+    for (double& a : s.ar) a = normal(s.engine);
+    s.flipped = uniform(s.engine) < options_.flip_probability;
+    s.missed = uniform(s.engine) < options_.miss_probability;
+    s.started = true;
+  } else {
+    SAMP_CHECK(frame > s.last_frame) << "detector model: track " << track_id << ": frame " << frame
+                                     << " after frame " << s.last_frame << " (frames must increase)";
+    const int gap = frame - s.last_frame;
+    const double rho = options_.correlation_frames > 0 ? std::exp(-double(gap) / options_.correlation_frames)
+                                                       : 0.0;
+    const double innovation = std::sqrt(std::max(0.0, 1.0 - rho * rho));
+    for (double& a : s.ar) a = rho * a + innovation * normal(s.engine);
+    for (int step = 0; step < gap; ++step) {
+      const double u_flip = uniform(s.engine), u_miss = uniform(s.engine);
+      s.flipped = s.flipped ? !(u_flip < flip.exit) : (u_flip < flip.enter);
+      s.missed = s.missed ? !(u_miss < miss.exit) : (u_miss < miss.enter);
+    }
+  }
+  s.last_frame = frame;
+  double box_noise[4];
+  for (double& b : box_noise) b = normal(s.engine);
+  const double score_noise = normal(s.engine);
+
+  const Eigen::Vector3d p = truth.position;
+  const double d = p.norm();
+  const Eigen::Vector3d ray = Eigen::Vector3d(p.x(), 0.0, p.z()).normalized();
+  const Eigen::Vector3d lateral(ray.z(), 0.0, -ray.x());
+  DetectionError e;
+  e.along_ray = (options_.ray_sigma_a + options_.ray_sigma_b * d + options_.ray_sigma_c * d * d) * s.ar[0];
+  e.lateral = (options_.lateral_sigma_a + options_.lateral_sigma_b * d) * s.ar[1];
+  e.vertical = options_.vertical_sigma * s.ar[2];
+  e.yaw_rad = (options_.yaw_sigma_deg_a + options_.yaw_sigma_deg_b * d) * kPi / 180.0 * s.ar[6];
+  e.flipped = s.flipped;
+  if (error) *error = e;
+
+  ObjectLabel det = truth;
+  det.frame = -1;
+  det.track_id = -1;
+  det.position = p + e.along_ray * ray + e.lateral * lateral + Eigen::Vector3d(0.0, e.vertical, 0.0);
+  det.position.z() = std::max(det.position.z(), 0.5);  // never behind the camera (documented)
+  det.rotation_y = WrapAngle(truth.rotation_y + e.yaw_rad + (e.flipped ? kPi : 0.0));
+  auto noisy_size = [&](double size, double standard) {
+    return std::max(0.5 * size, size + (options_.size_sigma + options_.relative_size_sigma * size) * standard);
+  };
+  det.height = noisy_size(truth.height, s.ar[3]);
+  det.width = noisy_size(truth.width, s.ar[4]);
+  det.length = noisy_size(truth.length, s.ar[5]);
+  Eigen::Vector4d b = truth.box_2d;
+  for (int i = 0; i < 4; ++i) b[i] += options_.box_sigma_px * box_noise[i];
+  b[0] = std::clamp(b[0], 0.0, camera.width - 2.0);
+  b[1] = std::clamp(b[1], 0.0, camera.height - 2.0);
+  b[2] = std::clamp(b[2], b[0] + 1.0, camera.width - 1.0);
+  b[3] = std::clamp(b[3], b[1] + 1.0, camera.height - 1.0);
+  det.box_2d = b;
+  det.alpha = WrapAngle(det.rotation_y - std::atan2(det.position.x(), det.position.z()));
+  det.score = std::clamp(0.97 - 0.008 * d + 0.03 * score_noise, 0.05, 1.0);
+  if (s.missed || visible_pixels < options_.min_pixels) return false;
+  *detection = det;
+  return true;
+}
+
+bool ProjectBox(const ObjectLabel& label, const PinholeCamera& camera, Eigen::Vector4d* box_2d) {
+  const double c = std::cos(label.rotation_y), s = std::sin(label.rotation_y);
+  double x1 = 1e18, y1 = 1e18, x2 = -1e18, y2 = -1e18;
+  bool any = false;
+  for (int i = 0; i < 8; ++i) {
+    const double lx = (i & 1 ? 0.5 : -0.5) * label.length;
+    const double lz = (i & 2 ? 0.5 : -0.5) * label.width;
+    const double ly = (i & 4) ? -label.height : 0.0;
+    // camera_from_object = [R_y(ry) | position], R_y = [[c, 0, s], [0, 1, 0], [-s, 0, c]].
+    const Eigen::Vector3d p = label.position + Eigen::Vector3d(c * lx + s * lz, ly, -s * lx + c * lz);
+    if (p.z() < 0.1) continue;
+    const Eigen::Vector2d uv = camera.Project(p);
+    x1 = std::min(x1, uv.x());
+    y1 = std::min(y1, uv.y());
+    x2 = std::max(x2, uv.x());
+    y2 = std::max(y2, uv.y());
+    any = true;
+  }
+  if (!any) return false;
+  x1 = std::clamp(x1, 0.0, camera.width - 1.0);
+  x2 = std::clamp(x2, 0.0, camera.width - 1.0);
+  y1 = std::clamp(y1, 0.0, camera.height - 1.0);
+  y2 = std::clamp(y2, 0.0, camera.height - 1.0);
+  if (x2 - x1 < 2.0 || y2 - y1 < 2.0) return false;
+  *box_2d = Eigen::Vector4d(x1, y1, x2, y2);
+  return true;
+}
+
+std::vector<ObjectLabel> StereoDetectorModel::FalsePositives(int frame,
+                                                             const std::vector<ClutterCandidate>& candidates,
+                                                             const PinholeCamera& camera) {
+  (void)frame;
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::map<int, const ClutterCandidate*> visible;
+  std::map<int, Eigen::Vector4d> boxes;
+  for (const ClutterCandidate& c : candidates) {
+    ObjectLabel probe;
+    probe.position = c.position;
+    probe.rotation_y = c.rotation_y;
+    probe.height = c.height;
+    probe.width = c.width;
+    probe.length = c.length;
+    Eigen::Vector4d box;
+    if (c.position.z() > 3.0 && ProjectBox(probe, camera, &box)) {
+      visible[c.id] = &c;
+      boxes[c.id] = box;
+    }
+  }
+  // Survival of the false positives alive so far (they die with their candidate's visibility).
+  const double survive = 1.0 - 1.0 / options_.false_positive_mean_run_frames;
+  std::vector<FalsePositiveState> next;
+  for (const FalsePositiveState& fp : alive_) {
+    if (visible.count(fp.candidate_id) && uniform(clutter_engine_) < survive) next.push_back(fp);
+  }
+  // Births: Poisson with mean rate / lifetime, so that rate false positives are alive on average.
+  if (!visible.empty() && options_.false_positives_per_frame > 0) {
+    std::poisson_distribution<int> births(options_.false_positives_per_frame /
+                                          options_.false_positive_mean_run_frames);
+    const int n = births(clutter_engine_);
+    for (int k = 0; k < n; ++k) {
+      auto it = visible.begin();
+      std::advance(it, std::uniform_int_distribution<int>(0, int(visible.size()) - 1)(clutter_engine_));
+      bool taken = false;
+      for (const FalsePositiveState& fp : next) taken = taken || fp.candidate_id == it->first;
+      if (taken) continue;
+      FalsePositiveState fp;
+      fp.candidate_id = it->first;
+      fp.along = 0.4 * normal(clutter_engine_);
+      fp.lateral = 0.2 * normal(clutter_engine_);
+      fp.yaw = (uniform(clutter_engine_) < 0.5 ? 0.0 : kPi) + 0.1 * normal(clutter_engine_);
+      next.push_back(fp);
+    }
+  }
+  alive_ = std::move(next);
+  std::vector<ObjectLabel> out;
+  for (const FalsePositiveState& fp : alive_) {
+    const ClutterCandidate& c = *visible.at(fp.candidate_id);
+    ObjectLabel det;
+    det.type = "Car";
+    det.height = c.height;
+    det.width = c.width;
+    det.length = c.length;
+    const Eigen::Vector3d ray = Eigen::Vector3d(c.position.x(), 0.0, c.position.z()).normalized();
+    const Eigen::Vector3d lateral(ray.z(), 0.0, -ray.x());
+    det.position = c.position + (fp.along + 0.1 * normal(clutter_engine_)) * ray +
+                   (fp.lateral + 0.05 * normal(clutter_engine_)) * lateral;
+    det.rotation_y = WrapAngle(c.rotation_y + fp.yaw);
+    if (!ProjectBox(det, camera, &det.box_2d)) continue;
+    const double d = det.position.norm();
+    det.alpha = WrapAngle(det.rotation_y - std::atan2(det.position.x(), det.position.z()));
+    det.score = std::clamp(0.75 - 0.008 * d + 0.1 * normal(clutter_engine_), 0.05, 1.0);
+    out.push_back(det);
+  }
+  return out;
+}
+
+}  // namespace samp

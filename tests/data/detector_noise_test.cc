@@ -1,0 +1,387 @@
+#include "libsamp/data/detector_noise.h"
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "libsamp/core/error.h"
+#include "libsamp/data/kitti_io.h"
+#include "libsamp/data/sequence_layout.h"
+#include "tests/testing/expect_error.h"
+
+namespace samp {
+namespace {
+
+// A synthetic detector with known white noise (standard deviations and biases).
+struct TrueNoise {
+  double along_a = 0.0, along_b = 0.0, across_a = 0.0, across_b = 0.0, vertical = 0.0;
+  double along_bias = 0.0;
+  double size_sigma[3] = {0, 0, 0}, size_bias[3] = {0, 0, 0};
+  double yaw_deg = 0.0;
+  double outliers = 0.0;  // share of detections with one gross error (position, size or a flip)
+};
+
+constexpr double kPosition = 0.0, kLength = 4.2, kWidth = 1.8, kHeight = 1.5;
+
+// Applies the noise to a true box; `rng` drives it.
+ObjectLabel Detect(const ObjectLabel& truth, const TrueNoise& noise, std::mt19937& rng) {
+  std::normal_distribution<double> unit(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  ObjectLabel d = truth;
+  Eigen::Vector3d ray(truth.position.x(), 0, truth.position.z());
+  const double distance = ray.norm();
+  ray /= distance;
+  const Eigen::Vector3d across(ray.z(), 0, -ray.x());
+  d.position += ray * (noise.along_bias + (noise.along_a + noise.along_b * distance) * unit(rng)) +
+                across * (noise.across_a + noise.across_b * distance) * unit(rng) +
+                Eigen::Vector3d(0, noise.vertical * unit(rng), 0);
+  d.height += noise.size_bias[0] + noise.size_sigma[0] * unit(rng);
+  d.width += noise.size_bias[1] + noise.size_sigma[1] * unit(rng);
+  d.length += noise.size_bias[2] + noise.size_sigma[2] * unit(rng);
+  d.rotation_y += noise.yaw_deg * M_PI / 180 * unit(rng);
+  if (uniform(rng) < noise.outliers) {
+    const double kind = uniform(rng);
+    if (kind < 1.0 / 3) {
+      d.position += ray * (uniform(rng) < 0.5 ? -1 : 1) * (4.0 + 4.0 * uniform(rng));  // a gross position error
+    } else if (kind < 2.0 / 3) {
+      d.length += 3.0 + 2.0 * uniform(rng), d.width -= 0.8, d.height += 1.0;  // a wrong box
+    } else {
+      d.rotation_y += M_PI;  // a flip
+    }
+  }
+  return d;
+}
+
+// Matched detections of cars at 5-55 m (uniform), one per true box.
+std::vector<MatchedDetection> Matches(const TrueNoise& noise, int count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<MatchedDetection> out;
+  for (int i = 0; i < count; ++i) {
+    MatchedDetection m;
+    const double distance = 5 + 50 * uniform(rng), bearing = (uniform(rng) - 0.5) * 1.2;
+    m.truth.position = Eigen::Vector3d(distance * std::sin(bearing), 1.65, distance * std::cos(bearing));
+    m.truth.height = kHeight, m.truth.width = kWidth, m.truth.length = kLength;
+    m.truth.rotation_y = (uniform(rng) - 0.5) * 2 * M_PI;
+    m.detection = Detect(m.truth, noise, rng);
+    m.truth_id = i / 20;
+    out.push_back(m);
+  }
+  return out;
+}
+
+void ExpectSigma(double estimated, double truth, const std::string& what) {
+  EXPECT_NEAR(estimated, truth, 0.25 * truth) << what;
+}
+
+// sigma(d) of the model against the truth at 10 and 45 m.
+void ExpectPosition(const DetectorNoiseModel& m, const TrueNoise& n) {
+  for (double d : {10.0, 45.0}) {
+    ExpectSigma(m.along_sigma_a + m.along_sigma_b * d, n.along_a + n.along_b * d, "along at " + std::to_string(d));
+    ExpectSigma(m.across_sigma_a + m.across_sigma_b * d, n.across_a + n.across_b * d,
+                "across at " + std::to_string(d));
+    ExpectSigma(m.vertical_sigma_a + m.vertical_sigma_b * d, n.vertical, "vertical at " + std::to_string(d));
+  }
+}
+
+TrueNoise PositionNoise() {
+  TrueNoise n;
+  n.along_a = 0.2, n.along_b = 0.02, n.across_a = 0.08, n.across_b = 0.004, n.vertical = 0.15;
+  n.along_bias = 0.2;
+  return n;
+}
+
+TrueNoise SizeNoise() {
+  TrueNoise n;
+  n.size_sigma[0] = 0.25, n.size_sigma[1] = 0.4, n.size_sigma[2] = 0.9;
+  n.size_bias[0] = 0.1, n.size_bias[1] = -0.25, n.size_bias[2] = 0.3;
+  return n;
+}
+
+TrueNoise YawNoise() {
+  TrueNoise n;
+  n.yaw_deg = 4.0;
+  return n;
+}
+
+TrueNoise AllNoise(double outliers) {
+  TrueNoise n = PositionNoise();
+  const TrueNoise s = SizeNoise();
+  for (int i = 0; i < 3; ++i) n.size_sigma[i] = s.size_sigma[i], n.size_bias[i] = s.size_bias[i];
+  n.yaw_deg = 4.0;
+  n.outliers = outliers;
+  return n;
+}
+
+TEST(DetectorNoiseTruth, PositionAloneRecovered) {
+  const TrueNoise n = PositionNoise();
+  const DetectorNoiseModel m =
+      EstimateDetectorNoiseFromTruth(Matches(n, 3000, 1), 0, 0, 150, DetectorNoiseOptions(), TrackerOptions());
+  EXPECT_EQ(m.source, "ground truth");
+  ExpectPosition(m, n);
+  EXPECT_NEAR(m.along_bias, 0.2, 0.05);
+  EXPECT_TRUE(m.biases_estimated);
+  EXPECT_EQ(m.num_position_samples, 3000);
+  int binned = 0;
+  for (const DistanceBin& b : m.bins) binned += b.count;
+  EXPECT_EQ(binned, 3000);
+}
+
+TEST(DetectorNoiseTruth, SizeAloneRecovered) {
+  const TrueNoise n = SizeNoise();
+  const DetectorNoiseModel m =
+      EstimateDetectorNoiseFromTruth(Matches(n, 2000, 2), 0, 0, 100, DetectorNoiseOptions(), TrackerOptions());
+  for (int i = 0; i < 3; ++i) {
+    ExpectSigma(m.size_sigma[i], n.size_sigma[i], "size " + std::to_string(i));
+    EXPECT_NEAR(m.size_bias[i], n.size_bias[i], 0.05) << i;
+  }
+}
+
+TEST(DetectorNoiseTruth, YawAloneRecovered) {
+  const TrueNoise n = YawNoise();
+  const DetectorNoiseModel m =
+      EstimateDetectorNoiseFromTruth(Matches(n, 2000, 3), 0, 0, 100, DetectorNoiseOptions(), TrackerOptions());
+  ExpectSigma(m.yaw_sigma_deg, 4.0, "yaw");
+  EXPECT_EQ(m.flip_rate, 0.0);
+}
+
+TEST(DetectorNoiseTruth, AllCuesWithTenPercentOutliers) {
+  const TrueNoise n = AllNoise(0.10);
+  const DetectorNoiseModel m =
+      EstimateDetectorNoiseFromTruth(Matches(n, 4000, 4), 200, 60, 200, DetectorNoiseOptions(), TrackerOptions());
+  ExpectPosition(m, n);
+  EXPECT_NEAR(m.along_bias, 0.2, 0.05);
+  for (int i = 0; i < 3; ++i) {
+    ExpectSigma(m.size_sigma[i], n.size_sigma[i], "size " + std::to_string(i));
+    EXPECT_NEAR(m.size_bias[i], n.size_bias[i], 0.05) << i;
+  }
+  ExpectSigma(m.yaw_sigma_deg, 4.0, "yaw");
+  EXPECT_NEAR(m.flip_rate, 0.1 / 3, 0.015);
+  EXPECT_NEAR(m.miss_rate, 200.0 / 4200.0, 1e-12);
+  EXPECT_NEAR(m.false_positives_per_frame, 0.3, 1e-12);
+  EXPECT_EQ(m.num_tracks, 200);
+}
+
+// Self-calibration: cars seen over 25 frames by a moving camera, each car's
+// detections one track; no ground truth reaches the estimator.
+std::vector<LinkedSequence> Sequences(const TrueNoise& noise, unsigned seed, int num_sequences = 4) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<LinkedSequence> out;
+  for (int s = 0; s < num_sequences; ++s) {
+    LinkedSequence seq;
+    constexpr int kFrames = 25;
+    for (int f = 0; f < kFrames; ++f) {
+      FrameDetections fd;
+      fd.frame = f;
+      fd.world_from_camera.translation() = Eigen::Vector3d(0, 0, 0.6 * f);  // the ego drives at 6 m/s
+      seq.frames.push_back(fd);
+    }
+    for (int c = 0; c < 12; ++c) {
+      // Parked (half) or driving at 4-12 m/s along z, 10-50 m ahead at the start.
+      const Eigen::Vector3d start((uniform(rng) < 0.5 ? -1 : 1) * (2 + 4 * uniform(rng)), 1.65, 12 + 40 * uniform(rng));
+      const double speed = c % 2 == 0 ? 0.0 : (uniform(rng) < 0.5 ? -1 : 1) * (4 + 8 * uniform(rng));
+      LinkedTrack track;
+      track.id = c;
+      for (int f = 0; f < kFrames; ++f) {
+        const Eigen::Vector3d world = start + Eigen::Vector3d(0, 0, speed * f / 10.0);
+        ObjectLabel truth;
+        truth.position = seq.frames[f].world_from_camera.inverse() * world;
+        if (truth.position.z() < 4) continue;
+        truth.height = kHeight, truth.width = kWidth, truth.length = kLength;
+        truth.rotation_y = speed < 0 ? M_PI / 2 : -M_PI / 2;
+        ObjectLabel d = Detect(truth, noise, rng);
+        d.frame = f;
+        d.track_id = c;
+        track.detections.push_back(d);
+        seq.frames[f].detections.push_back(d);
+        ++seq.num_detections;
+      }
+      seq.tracks.push_back(track);
+    }
+    out.push_back(seq);
+  }
+  return out;
+}
+
+TEST(DetectorNoiseSelf, PositionAloneRecovered) {
+  const TrueNoise n = PositionNoise();
+  // The weights of the smoother: the truth's shape, as CalibrateTracker passes its current estimate.
+  TrackerOptions weighting;
+  weighting.along_sigma_a = 0.2, weighting.along_sigma_b = 0.02;
+  weighting.across_sigma_a = 0.08, weighting.across_sigma_b = 0.004;
+  const DetectorNoiseModel m = EstimateDetectorNoise(Sequences(n, 11), DetectorNoiseOptions(), weighting);
+  EXPECT_EQ(m.source, "self-calibration");
+  EXPECT_FALSE(m.biases_estimated);
+  ExpectPosition(m, n);
+  EXPECT_EQ(m.num_tracks, 48);
+}
+
+TEST(DetectorNoiseSelf, SizeAndYawAloneRecovered) {
+  TrueNoise n = SizeNoise();
+  n.yaw_deg = 4.0;
+  const DetectorNoiseModel m = EstimateDetectorNoise(Sequences(n, 12), DetectorNoiseOptions(), TrackerOptions());
+  for (int i = 0; i < 3; ++i) {
+    ExpectSigma(m.size_sigma[i], n.size_sigma[i], "size " + std::to_string(i));
+    EXPECT_EQ(m.size_bias[i], 0.0);  // not observable without ground truth
+  }
+  ExpectSigma(m.yaw_sigma_deg, 4.0, "yaw");
+}
+
+TEST(DetectorNoiseSelf, AllCuesWithTenPercentOutliers) {
+  const TrueNoise n = AllNoise(0.10);
+  const DetectorNoiseModel m = EstimateDetectorNoise(Sequences(n, 13), DetectorNoiseOptions(), TrackerOptions());
+  ExpectPosition(m, n);
+  for (int i = 0; i < 3; ++i) ExpectSigma(m.size_sigma[i], n.size_sigma[i], "size " + std::to_string(i));
+  ExpectSigma(m.yaw_sigma_deg, 4.0, "yaw");
+  EXPECT_NEAR(m.flip_rate, 0.1 / 3, 0.015);
+}
+
+TEST(DetectorNoiseSelf, TooFewDetectionsKeepTheDefaultsWithANote) {
+  const TrueNoise n = AllNoise(0.0);
+  std::vector<LinkedSequence> one = Sequences(n, 14, 1);
+  one[0].tracks.resize(1);  // one track of <= 25 detections
+  TrackerOptions defaults;
+  const DetectorNoiseModel m = EstimateDetectorNoise(one, DetectorNoiseOptions(), defaults);
+  EXPECT_EQ(m.source, "defaults");
+  EXPECT_EQ(m.along_sigma_a, defaults.along_sigma_a);
+  EXPECT_EQ(m.size_sigma[2], defaults.size_sigma);
+  ASSERT_GE(m.notes.size(), 3u);
+  EXPECT_NE(m.notes[0].find("position"), std::string::npos);
+  EXPECT_NE(m.BriefReport().find("NOTE"), std::string::npos);
+}
+
+TEST(DetectorNoiseModelFile, RoundTripAndClearErrors) {
+  const DetectorNoiseModel m =
+      EstimateDetectorNoiseFromTruth(Matches(AllNoise(0.05), 500, 5), 10, 3, 30, DetectorNoiseOptions(),
+                                     TrackerOptions());
+  const auto dir = std::filesystem::temp_directory_path() / ("samp_detector_noise_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "detector.json").string();
+  WriteDetectorNoiseModel(path, m);
+  const DetectorNoiseModel back = ReadDetectorNoiseModel(path);
+  EXPECT_EQ(back.ToJson(), m.ToJson());
+  EXPECT_EQ(back.bins.size(), m.bins.size());
+
+  auto write = [&](const std::string& text) {
+    std::ofstream(path) << text;
+    return path;
+  };
+  test::ExpectError([&] { ReadDetectorNoiseModel(write("{ not json")); }, {"detector.json"});
+  nlohmann::json j = nlohmann::json::parse(m.ToJson());
+  j["version"] = 2;
+  test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"detector.json", "version 2"});
+  j = nlohmann::json::parse(m.ToJson());
+  j["format"] = "something else";
+  test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"'format'"});
+  j = nlohmann::json::parse(m.ToJson());
+  j["size"]["width"]["sigma"] = -1.0;
+  test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"detector.json", "size.sigma"});
+  j = nlohmann::json::parse(m.ToJson());
+  j.erase("flip_rate");
+  test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"flip_rate"});
+  j = nlohmann::json::parse(m.ToJson());
+  j["miss_rate"] = 1.5;
+  test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"miss_rate"});
+  std::filesystem::remove_all(dir);
+}
+
+TEST(DetectorNoiseModelFile, AppliesToTheTracker) {
+  DetectorNoiseModel m;
+  m.along_sigma_a = 0.3, m.along_sigma_b = 0.02, m.across_sigma_a = 0.05, m.across_sigma_b = 0.001;
+  m.vertical_sigma_a = 0.1, m.vertical_sigma_b = 0.0;
+  m.size_sigma[0] = 0.3, m.size_sigma[1] = 0.6, m.size_sigma[2] = 0.9;
+  m.yaw_sigma_deg = 4.0;
+  TrackerOptions t;
+  t.along_sigma_c = 0.01;
+  m.ApplyTo(&t);
+  EXPECT_EQ(t.along_sigma_a, 0.3);
+  EXPECT_EQ(t.along_sigma_c, 0.0);
+  EXPECT_NEAR(t.size_sigma, std::sqrt((0.09 + 0.36 + 0.81) / 3), 1e-12);
+  EXPECT_EQ(t.yaw_sigma_deg, 4.0);
+  EXPECT_NO_THROW(t.Check());
+  DetectorNoiseOptions o;
+  o.bin_edges = {0, 20, 10};
+  test::ExpectError([&] { o.Check(); }, {"DetectorNoiseOptions.bin_edges"});
+}
+
+// `samp calibrate-detector`'s library call on a sequence directory written
+// here (calibration, detections/, ground-truth tracking labels): the model
+// recovers the detector's sigmas and biases, round-trips through its file,
+// and mismatched label files and too few detections are clear errors.
+std::string WriteCalibrationSequence(const std::string& dir, const TrueNoise& noise, int num_frames,
+                                     std::string* labels_path) {
+  std::filesystem::create_directories(dir + "/calib");
+  std::filesystem::create_directories(dir + "/detections");
+  std::filesystem::create_directories(dir + "/gt/label_02");
+  const std::string name = "0000";
+  const SequenceLayout layout(dir, name);
+  StereoCalibration calibration;
+  calibration.baseline = 0.54;
+  WriteCalibration(layout.Calibration(), calibration);
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<ObjectLabel> truths;
+  for (int f = 0; f < num_frames; ++f) {
+    std::vector<ObjectLabel> detections;
+    for (int c = 0; c < 6; ++c) {
+      ObjectLabel truth;
+      truth.frame = f, truth.track_id = c;
+      truth.position = Eigen::Vector3d(-6 + 2.4 * c, 1.65, 8 + 7.0 * c + 0.3 * f);
+      truth.height = kHeight, truth.width = kWidth, truth.length = kLength;
+      truth.rotation_y = -M_PI / 2;
+      truths.push_back(truth);
+      if (uniform(rng) < 0.05) continue;  // missed
+      ObjectLabel d = Detect(truth, noise, rng);
+      d.frame = -1, d.track_id = -1;
+      detections.push_back(d);
+    }
+    WriteLabels(layout.Detections(f), detections);
+  }
+  *labels_path = layout.GroundTruthLabels();
+  WriteTrackingLabels(*labels_path, truths);
+  return dir;
+}
+
+TEST(DetectorCalibrationFromTruth, RecoversTheDetectorAndChecksItsInput) {
+  const auto root = std::filesystem::temp_directory_path() / ("samp_calibrate_" + std::to_string(::getpid()));
+  TrueNoise noise = AllNoise(0.0);
+  std::string labels;
+  DetectorCalibrationOptions o;
+  o.sequences = {WriteCalibrationSequence((root / "seq").string(), noise, 120, &labels)};
+  DetectorCalibrationSummary summary;
+  const DetectorNoiseModel m = CalibrateDetectorFromTruth(o, &summary);
+  EXPECT_EQ(summary.num_truths, 720) << summary.BriefReport();
+  // Far cars (up to 80 m, along-ray sigma ~1.8 m) may err beyond the 3 m match distance.
+  EXPECT_GE(summary.num_matched, 0.97 * summary.num_detections) << summary.BriefReport();
+  EXPECT_EQ(m.source, "ground truth");
+  for (int i = 0; i < 3; ++i) {
+    ExpectSigma(m.size_sigma[i], noise.size_sigma[i], "size " + std::to_string(i));
+    EXPECT_NEAR(m.size_bias[i], noise.size_bias[i], 0.05) << i;
+  }
+  EXPECT_NEAR(m.along_bias, noise.along_bias, 0.05);
+  EXPECT_NEAR(m.miss_rate, 0.05, 0.025);
+  const std::string path = (root / "model.json").string();
+  WriteDetectorNoiseModel(path, m);
+  EXPECT_EQ(ReadDetectorNoiseModel(path).ToJson(), m.ToJson());
+
+  // A label file of another sequence (frames beyond this one's).
+  std::vector<ObjectLabel> other = ReadTrackingLabels(labels);
+  other.back().frame = 500;
+  WriteTrackingLabels((root / "other.txt").string(), other);
+  o.truth_labels = {(root / "other.txt").string()};
+  test::ExpectError([&] { CalibrateDetectorFromTruth(o); }, {"other.txt", "frame 500", "mismatched"});
+  // Too few detections: 3 frames.
+  DetectorCalibrationOptions few;
+  few.sequences = {WriteCalibrationSequence((root / "few").string(), noise, 3, &labels)};
+  test::ExpectError([&] { CalibrateDetectorFromTruth(few); }, {"calibrate-detector: only ", "at least 30"});
+  std::filesystem::remove_all(root);
+}
+
+}  // namespace
+}  // namespace samp
