@@ -108,15 +108,20 @@ class OptionsJson {
   }
   template <typename S>
   void Nested(const std::string& key, S& options) {
+    NestedWith(key, [&options](OptionsJson& io) { OptionFields(io, options); });
+  }
+  // The object at `key`, its fields listed by visit(OptionsJson&) (an OptionTable's Json).
+  template <typename Visit>
+  void NestedWith(const std::string& key, Visit visit) {
     if (writing()) {
       nlohmann::json child = nlohmann::json::object();
       OptionsJson io(&child);
-      OptionFields(io, options);
+      visit(io);
       (*out_)[key] = std::move(child);
     } else {
       const JsonFields child = in_->Object(key);
       OptionsJson io(&child);
-      OptionFields(io, options);
+      visit(io);
     }
   }
 

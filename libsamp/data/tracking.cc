@@ -722,65 +722,6 @@ void FinishSummary(const std::vector<LinkedTrack>& tracks, int warn_median_lengt
 
 }  // namespace
 
-void TrackerOptions::Check() const {
-  SAMP_CHECK(along_sigma_a > 0 && along_sigma_b >= 0 && along_sigma_c >= 0)
-      << "TrackerOptions: along_sigma_a must be > 0, along_sigma_b and along_sigma_c >= 0";
-  SAMP_CHECK(across_sigma_a > 0 && across_sigma_b >= 0)
-      << "TrackerOptions: across_sigma_a must be > 0, across_sigma_b >= 0";
-  SAMP_CHECK(vertical_sigma_a > 0 && vertical_sigma_b >= 0)
-      << "TrackerOptions: vertical_sigma_a must be > 0, vertical_sigma_b >= 0";
-  SAMP_CHECK(size_sigma > 0) << "TrackerOptions.size_sigma must be > 0";
-  SAMP_CHECK(yaw_sigma_deg > 0) << "TrackerOptions.yaw_sigma_deg must be > 0";
-  SAMP_CHECK(acceleration_sigma > 0) << "TrackerOptions.acceleration_sigma must be > 0";
-  SAMP_CHECK(max_speed > 0) << "TrackerOptions.max_speed must be > 0";
-  SAMP_CHECK(gate_chi2 > 0 && size_gate_chi2 > 0 && height_gate_chi2 > 0)
-      << "TrackerOptions: gate_chi2, size_gate_chi2 and height_gate_chi2 must be > 0";
-  SAMP_CHECK(yaw_gate_deg > 0 && yaw_gate_deg <= 90) << "TrackerOptions.yaw_gate_deg must be in (0, 90]";
-  SAMP_CHECK(tentative_penalty >= 0) << "TrackerOptions.tentative_penalty must be >= 0";
-  SAMP_CHECK(confirm_hits >= 1) << "TrackerOptions.confirm_hits must be >= 1";
-  SAMP_CHECK(tentative_max_misses >= 0) << "TrackerOptions.tentative_max_misses must be >= 0";
-  SAMP_CHECK(max_misses >= 0) << "TrackerOptions.max_misses must be >= 0";
-  SAMP_CHECK(max_join_gap >= 0) << "TrackerOptions.max_join_gap must be >= 0";
-  SAMP_CHECK(join_gate_chi2 > 0) << "TrackerOptions.join_gate_chi2 must be > 0";
-  SAMP_CHECK(swap_margin >= 0) << "TrackerOptions.swap_margin must be >= 0";
-  SAMP_CHECK(fit_window >= 1) << "TrackerOptions.fit_window must be >= 1";
-  SAMP_CHECK(min_track_length >= 1) << "TrackerOptions.min_track_length must be >= 1";
-  SAMP_CHECK(frame_rate_hz > 0) << "TrackerOptions.frame_rate_hz must be > 0";
-  SAMP_CHECK(warn_median_length >= 0) << "TrackerOptions.warn_median_length must be >= 0";
-}
-
-void OptionFields(OptionsJson& io, TrackerOptions& o) {
-  io("along_sigma_a", o.along_sigma_a);
-  io("along_sigma_b", o.along_sigma_b);
-  io("along_sigma_c", o.along_sigma_c);
-  io("across_sigma_a", o.across_sigma_a);
-  io("across_sigma_b", o.across_sigma_b);
-  io("vertical_sigma_a", o.vertical_sigma_a);
-  io("vertical_sigma_b", o.vertical_sigma_b);
-  io("size_sigma", o.size_sigma);
-  io("yaw_sigma_deg", o.yaw_sigma_deg);
-  io("acceleration_sigma", o.acceleration_sigma);
-  io("max_speed", o.max_speed);
-  io("gate_chi2", o.gate_chi2);
-  io("size_gate_chi2", o.size_gate_chi2);
-  io("height_gate_chi2", o.height_gate_chi2);
-  io("yaw_gate_deg", o.yaw_gate_deg);
-  io("tentative_penalty", o.tentative_penalty);
-  io("confirm_hits", o.confirm_hits);
-  io("tentative_max_misses", o.tentative_max_misses);
-  io("max_misses", o.max_misses);
-  io("join_fragments", o.join_fragments);
-  io("max_join_gap", o.max_join_gap);
-  io("join_gate_chi2", o.join_gate_chi2);
-  io("resolve_switches", o.resolve_switches);
-  io("swap_margin", o.swap_margin);
-  io("fit_window", o.fit_window);
-  io("min_track_length", o.min_track_length);
-  io("frame_rate_hz", o.frame_rate_hz);
-  io("warn_median_length", o.warn_median_length);
-  io.Optional("robust_cues", o.robust_cues, false);  // added later: written when on
-}
-
 std::string TrackerOptions::ToJson() const { return DumpJson(OptionsToJson(*this)); }
 
 std::string TrackingSummary::BriefReport() const {

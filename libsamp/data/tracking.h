@@ -96,8 +96,9 @@ struct TrackerOptions {
   std::string ToJson() const;
 };
 
-// Lists every TrackerOptions field once, for config.json's writer and reader
-// (core/json_fields.h; pipeline/fit_config.h owns config.json).
+// Every TrackerOptions field, for config.json's writer and reader, through
+// the option table (data/tracker_option_table.h; pipeline/fit_config.h owns
+// config.json).
 void OptionFields(OptionsJson& io, TrackerOptions& o);
 
 // Covariance (m^2) of a detected box's bottom centre `position` in the camera

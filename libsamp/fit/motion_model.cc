@@ -15,18 +15,6 @@ const char* MotionModelName(MotionModel model) {
   return "unknown";
 }
 
-void MotionNoise::Check() const {
-  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
-  auto non_negative = [](double v) { return std::isfinite(v) && v >= 0.0; };
-  SAMP_CHECK(non_negative(speed_noise)) << "MotionNoise.speed_noise must be >= 0";
-  SAMP_CHECK(non_negative(yaw_rate_noise)) << "MotionNoise.yaw_rate_noise must be >= 0";
-  SAMP_CHECK(positive(sigma_position)) << "MotionNoise.sigma_position must be > 0";
-  SAMP_CHECK(positive(sigma_height)) << "MotionNoise.sigma_height must be > 0";
-  SAMP_CHECK(positive(sigma_yaw)) << "MotionNoise.sigma_yaw must be > 0";
-  SAMP_CHECK(positive(sigma_speed)) << "MotionNoise.sigma_speed must be > 0";
-  SAMP_CHECK(positive(sigma_yaw_rate)) << "MotionNoise.sigma_yaw_rate must be > 0";
-}
-
 MotionModel SelectMotionModel(double speed, double yaw_rate, double eps_speed, double eps_yaw_rate) {
   if (std::abs(speed) < eps_speed) return MotionModel::kStanding;
   if (std::abs(yaw_rate) < eps_yaw_rate) return MotionModel::kStraight;

@@ -56,54 +56,6 @@ void OptionFields(OptionsJson& io, SequenceOptions& o) {
   io("last_frame", o.last_frame);
 }
 
-void OptionFields(OptionsJson& io, MotionNoise& o) {
-  io("speed_noise", o.speed_noise);
-  io("yaw_rate_noise", o.yaw_rate_noise);
-  io("sigma_position", o.sigma_position);
-  io("sigma_height", o.sigma_height);
-  io("sigma_yaw", o.sigma_yaw);
-  io("sigma_speed", o.sigma_speed);
-  io("sigma_yaw_rate", o.sigma_yaw_rate);
-}
-
-void OptionFields(OptionsJson& io, FitOptions& o) {
-  io("single_frame", o.single_frame);
-  io("em_iterations", o.em_iterations);
-  io("em_initial_sigma_scale", o.em_initial_sigma_scale);
-  io("association_radius", o.association_radius);
-  io("em_distance_threshold", o.em_distance_threshold);
-  io("em_box_margin", o.em_box_margin);
-  io("min_points_per_frame", o.min_points_per_frame);
-  io("max_solve_points_per_frame", o.max_solve_points_per_frame);
-  io("compress_data_blocks", o.compress_data_blocks);
-  io.Named("data_term", o.data_term, DataTermName, ParseDataTerm);
-  io.Named("data_weighting", o.data_weighting, DataWeightingName, ParseDataWeighting);
-  io("correlation_area_px", o.correlation_area_px);
-  io("huber_threshold", o.huber_threshold);
-  io("mixture_loss", o.mixture_loss);
-  io("silhouette_sigma_px", o.silhouette_sigma_px);
-  io("outlier_threshold", o.outlier_threshold);
-  io("sigma_ground", o.sigma_ground);
-  io("shape_prior_weight", o.shape_prior_weight);
-  io("detection_size_sigma", o.detection_size_sigma);
-  io("detection_correlation_frames", o.detection_correlation_frames);
-  io("detection_position", o.detection_position);
-  io("standing_speed", o.standing_speed);
-  io("straight_yaw_rate", o.straight_yaw_rate);
-  io("max_motion_off_axis", o.max_motion_off_axis);
-  io("min_speed_significance", o.min_speed_significance);
-  io("max_position_change", o.max_position_change);
-  io.Nested("motion_noise", o.motion_noise);
-  io("max_iterations", o.max_iterations);
-  io("max_rejected_steps", o.max_rejected_steps);
-  io("function_tolerance", o.function_tolerance);
-  io("gradient_tolerance", o.gradient_tolerance);
-  io("parameter_tolerance", o.parameter_tolerance);
-  io("linear_solver", o.linear_solver);
-  io("num_threads", o.num_threads);
-  io("keep_points", o.keep_points);
-}
-
 void OptionFields(OptionsJson& io, RunFitOptions& o) {
   io("model", o.model_path);
   io("sequences", o.sequences);

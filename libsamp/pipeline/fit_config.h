@@ -8,6 +8,7 @@
 #include <string>
 
 #include "libsamp/core/json_fields.h"
+#include "libsamp/fit/fit_option_table.h"
 #include "libsamp/pipeline/run_fit.h"
 
 namespace samp {
@@ -17,8 +18,7 @@ void OptionFields(OptionsJson& io, RoadPlaneOptions& o);
 void OptionFields(OptionsJson& io, ObservationOptions& o);
 // TrackerOptions: data/tracking.h.
 void OptionFields(OptionsJson& io, SequenceOptions& o);
-void OptionFields(OptionsJson& io, MotionNoise& o);
-void OptionFields(OptionsJson& io, FitOptions& o);
+// MotionNoise, FitOptions: fit/fit_option_table.h (their option tables).
 void OptionFields(OptionsJson& io, RunFitOptions& o);
 
 struct FitConfig {

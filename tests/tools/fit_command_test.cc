@@ -11,6 +11,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
@@ -97,6 +98,52 @@ TEST(FitCommand, EveryTrackFailedExitsOne) {
             0)
       << err;
   EXPECT_FALSE(ReadTrackingLabels(out + "/label_02/" + scene.names[0] + ".txt").empty());
+}
+
+// The options come from the option tables (fit/fit_option_table.h,
+// data/tracker_option_table.h): new names, deprecated old names (which print a
+// note) and nested ones reach config.json; a value that breaks its rule is
+// refused while parsing, naming the option; --help-options prints the table.
+TEST(FitCommand, TableOptionsAndDeprecatedNames) {
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("table_options");
+  const std::string out = runs + "/out";
+  std::string err;
+  ASSERT_EQ(RunSamp({"fit", "--seq", scene.sequences[0], "--out", out, "--link-only", "--weighting", "mean",
+                     "--huber", "2", "--ray-depth-inside", "--tracker-gate", "10", "--no-tracker-swaps",
+                     "--motion-sigma-yaw", "0.04", "--em-box-margin", "0.5", "--tracker-along-sigma", "0.1,0,0.001"},
+                    runs + "/log", &err),
+            0)
+      << err;
+  for (const char* note : {"--weighting is deprecated, use --data-weighting",
+                           "--huber is deprecated, use --huber-threshold",
+                           "--ray-depth-inside is deprecated, use --data-term ray-depth",
+                           "--tracker-gate is deprecated, use --tracker-gate-chi2",
+                           "--no-tracker-swaps is deprecated, use --no-tracker-resolve-switches"}) {
+    EXPECT_NE(err.find(note), std::string::npos) << note << " not in: " << err;
+  }
+  const nlohmann::json config = nlohmann::json::parse(test::ReadText(out + "/config.json"));
+  EXPECT_EQ(config["fit"]["data_weighting"], "mean");
+  EXPECT_EQ(config["fit"]["huber_threshold"], 2.0);
+  EXPECT_EQ(config["fit"]["data_term"], "ray-depth");
+  EXPECT_EQ(config["fit"]["em_box_margin"], 0.5);
+  EXPECT_EQ(config["fit"]["motion_noise"]["sigma_yaw"], 0.04);
+  const nlohmann::json& tracker = config["sequence"]["tracker"];
+  EXPECT_EQ(tracker["gate_chi2"], 10.0);
+  EXPECT_EQ(tracker["resolve_switches"], false);
+  EXPECT_EQ(tracker["along_sigma_a"], 0.1);
+  EXPECT_EQ(tracker["along_sigma_c"], 0.001);
+
+  EXPECT_NE(RunSamp({"fit", "--seq", scene.sequences[0], "--out", out, "--link-only", "--em-iterations", "-1"},
+                    runs + "/log", &err),
+            0);
+  EXPECT_NE(err.find("--em-iterations"), std::string::npos) << err;
+  EXPECT_NE(err.find("must be >= 0, got -1"), std::string::npos) << err;
+
+  EXPECT_EQ(RunSamp({"fit", "--help-options", "markdown"}, runs + "/help", &err), 0) << err;
+  const std::string table = test::ReadText(runs + "/help.out");
+  EXPECT_EQ(table.rfind("| option | command line | default | rule | meaning |\n", 0), 0u) << table;
+  EXPECT_NE(table.find("| em_iterations | `--em-iterations` | 1 | >= 0 |"), std::string::npos) << table;
 }
 
 // A batch where one sequence fails exits 1 (everything asked for was not

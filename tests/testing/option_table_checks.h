@@ -1,0 +1,116 @@
+// Checks every option table passes (core/option_table.h), shared by the tests
+// of the layers that declare one: each field is wired to its own member (JSON
+// and command line), the JSON round-trips, and a doc's option list is the
+// table's.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+
+#include "libsamp/core/option_table.h"
+
+namespace samp::test {
+
+// A value other than the default, as command-line text.
+inline std::string OtherValue(const OptionInfo& info) {
+  switch (info.kind) {
+    case OptionKind::kFlag:
+      return info.default_text == "true" ? "false" : "true";
+    case OptionKind::kInt:
+      return std::to_string(std::stoi(info.default_text) + 7);
+    case OptionKind::kNumber: {
+      const double value = std::stod(info.default_text);
+      return FormatOptionNumber(value != 0.0 ? value * 0.75 : 0.25);
+    }
+    case OptionKind::kText:
+    case OptionKind::kChoice:
+      for (const std::string& c : info.choices) {
+        if (c != info.default_text) return c;
+      }
+  }
+  ADD_FAILURE() << info.name << ": no other value";
+  return info.default_text;
+}
+
+// The JSON leaves of `j` as "a.b" -> value text.
+inline void JsonLeaves(const nlohmann::json& j, const std::string& prefix, std::map<std::string, std::string>* out) {
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    if (it->is_object()) {
+      JsonLeaves(*it, prefix + it.key() + ".", out);
+    } else {
+      (*out)[prefix + it.key()] = it->dump();
+    }
+  }
+}
+
+// The JSON (OptionsToJson) holds exactly the table's fields, each once, with
+// distinct command-line names; setting one field through its binding (a
+// valid other value) changes that JSON key and no other.
+template <typename S>
+void ExpectEveryFieldWired(const OptionTable<S>& table, const std::string& prefix) {
+  const std::vector<OptionInfo> infos = table.Describe();
+  std::map<std::string, std::string> defaults;
+  JsonLeaves(OptionsToJson(S()), "", &defaults);
+  std::set<std::string> names, flags;
+  for (const OptionInfo& i : infos) {
+    EXPECT_TRUE(names.insert(i.name).second) << i.name;
+    EXPECT_TRUE(defaults.count(i.name)) << i.name << " not in the JSON";
+    EXPECT_FALSE(i.help.empty()) << i.name;
+    if (i.internal) continue;
+    EXPECT_TRUE(flags.insert(CommandLineName(i.flag, prefix)).second) << i.flag;
+    if (i.kind == OptionKind::kFlag) {
+      EXPECT_TRUE(flags.insert(OffFlagName(i, prefix)).second) << i.name;
+    }
+    for (const auto& d : i.deprecated) EXPECT_TRUE(flags.insert(CommandLineName(d.first, prefix)).second) << d.first;
+  }
+  EXPECT_EQ(names.size(), defaults.size());
+  for (const OptionInfo& info : infos) {
+    S options;
+    for (const OptionBinding& b : table.Bind(&options)) {
+      if (b.info.name != info.name) continue;
+      const std::string value = OtherValue(info);
+      EXPECT_EQ(b.info.Validate(value), "") << info.name << " = " << value;
+      b.set(value);
+    }
+    std::map<std::string, std::string> changed;
+    JsonLeaves(OptionsToJson(options), "", &changed);
+    for (const auto& [key, text] : defaults) {
+      EXPECT_EQ(changed[key] != text, key == info.name) << "setting " << info.name << ": " << key;
+    }
+  }
+}
+
+// Every field set to another value is read back from its JSON.
+template <typename S>
+void ExpectJsonRoundTrip(const OptionTable<S>& table) {
+  S options;
+  for (const OptionBinding& b : table.Bind(&options)) b.set(OtherValue(b.info));
+  const nlohmann::json written = OptionsToJson(options);
+  S read;
+  OptionsFromJson(JsonFields(written, "config.json"), &read);
+  EXPECT_EQ(OptionsToJson(read), written);
+  EXPECT_NE(written, OptionsToJson(S()));
+}
+
+// The text of `path` between "<!-- begin: MARKER -->\n" and "<!-- end: MARKER -->".
+inline std::string DocSection(const std::string& path, const std::string& marker) {
+  std::ifstream in(path);
+  EXPECT_TRUE(in.good()) << path;
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string doc = text.str();
+  const std::string begin = "<!-- begin: " + marker + " -->\n", end = "<!-- end: " + marker + " -->";
+  const size_t a = doc.find(begin), b = doc.find(end);
+  if (a == std::string::npos || b == std::string::npos || b < a) {
+    ADD_FAILURE() << path << ": no section between the markers '" << marker << "'";
+    return "";
+  }
+  return doc.substr(a + begin.size(), b - a - begin.size());
+}
+
+}  // namespace samp::test
