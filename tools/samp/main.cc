@@ -50,6 +50,8 @@ int main(int argc, char** argv) {
     return app.exit(e);
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
+  } catch (const CLI::Success& e) {  // an option that prints and ends the run (--help-options)
+    return app.exit(e);
   } catch (const CLI::ParseError& e) {
     // CLI11's own codes (105, 106, 109, ...) and its message without a prefix.
     std::cerr << "samp: error: " << e.what() << "\nRun `samp --help` or `samp COMMAND --help` for the options."
