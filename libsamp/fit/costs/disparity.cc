@@ -7,18 +7,6 @@
 
 namespace samp {
 
-namespace {
-
-// The camera centre in the object frame of pose (rotation (c, s) = R_y(theta)).
-void CameraInObject(const Eigen::Vector3d& camera, const double* pose, double c, double s, double* o_cam) {
-  const double dx = camera[0] - pose[0], dy = camera[1] - pose[1], dz = camera[2] - pose[2];
-  o_cam[0] = c * dx - s * dz;
-  o_cam[1] = dy;
-  o_cam[2] = s * dx + c * dz;
-}
-
-}  // namespace
-
 DisparityCost::DisparityCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
                              const std::vector<double>& sigmas, const DataCostOptions& options)
     : DataCost(lookup, points_in_world, sigmas, options, /*with_rays=*/true) {
@@ -78,8 +66,8 @@ bool DisparityCost::EvaluateRows(const double* z, const double* pose, int begin,
   CameraInObject(camera_, pose, c, s, o_cam);
   for (int row = 0; row < end - begin; ++row) {
     const int i = begin + row;
-    const double* w = &rays_[3 * i];
-    const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
+    double u[3];
+    RayInObject(i, c, s, u);
     double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
     double m, o[3], g[3];
     const RayResidual ray = Residual(i, phi_z, o_cam, u, &m, o, jp ? g : nullptr, dz_row);
@@ -99,8 +87,8 @@ std::vector<RayResidual> DisparityCost::RayResiduals(const double* z, const doub
   CameraInObject(camera_, pose, c, s, o_cam);
   std::vector<RayResidual> out(static_cast<size_t>(num_residuals()));
   for (int i = 0; i < num_residuals(); ++i) {
-    const double* w = &rays_[3 * i];
-    const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
+    double u[3];
+    RayInObject(i, c, s, u);
     double m, o[3];
     out[size_t(i)] = Residual(i, phi_z, o_cam, u, &m, o, nullptr, nullptr);
   }

@@ -11,18 +11,13 @@ bool PointSdfCost::EvaluateRows(const double* z, const double* pose, int begin, 
   const double* phi_z = lookup_->DenseCached(z);
   for (int row = 0; row < end - begin; ++row) {
     const int i = begin + row;
-    const double dx = points_[3 * i] - pose[0];
-    const double dy = points_[3 * i + 1] - pose[1];
-    const double dz = points_[3 * i + 2] - pose[2];
-    const double o[3] = {c * dx - s * dz, dy, s * dx + c * dz};
-    double g[3];
+    double o[3], g[3];
+    PointInObject(i, pose, c, s, o);
     double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
     const double phi = lookup_->EvaluateDense(phi_z, o, jp ? g : nullptr, dz_row);
     if (!std::isfinite(phi)) return false;
-    double d_psi = 1.0;
-    residuals[row] = sqrt_weight_ * Robust(phi * inv_sigmas_[i], &d_psi);  // s_i = phi / sigma_i
-    const double f = sqrt_weight_ * d_psi * inv_sigmas_[i];
-    WriteJacobianRow(f, c, s, g, o, nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
+    WriteDistanceRow(i, phi, c, s, g, o, nr, &residuals[row], dz_row,
+                     jp ? jp + size_t(row) * jp_stride : nullptr);
   }
   return true;
 }

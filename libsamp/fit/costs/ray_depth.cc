@@ -49,27 +49,22 @@ bool RayDepthCost::EvaluateRows(const double* z, const double* pose, int begin, 
   const double c = std::cos(pose[3]), s = std::sin(pose[3]);
   const double* phi_z = lookup_->DenseCached(z);
   // The camera centre in the object frame (points behind the far side).
-  const double cx = camera_[0] - pose[0], cy = camera_[1] - pose[1], cz = camera_[2] - pose[2];
-  const double o_cam[3] = {c * cx - s * cz, cy, s * cx + c * cz};
+  double o_cam[3];
+  CameraInObject(camera_, pose, c, s, o_cam);
   for (int row = 0; row < end - begin; ++row) {
     const int i = begin + row;
-    const double dx = points_[3 * i] - pose[0];
-    const double dy = points_[3 * i + 1] - pose[1];
-    const double dz = points_[3 * i + 2] - pose[2];
-    double o[3] = {c * dx - s * dz, dy, s * dx + c * dz};
-    double g[3];
+    double o[3], g[3];
+    PointInObject(i, pose, c, s, o);
     double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
     double phi = lookup_->EvaluateDense(phi_z, o, jp ? g : nullptr, dz_row);
     if (!std::isfinite(phi)) return false;
     if (phi != 0.0) {
-      const double* w = &rays_[3 * i];
-      const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
+      double u[3];
+      RayInObject(i, c, s, u);
       ToRayDistance(phi_z, o_cam, u, &phi, o, g, dz_row);  // else: phi, g, dz_row stay phi's at o
     }
-    double d_psi = 1.0;
-    residuals[row] = sqrt_weight_ * Robust(phi * inv_sigmas_[i], &d_psi);  // s_i = phi / sigma_i
-    const double f = sqrt_weight_ * d_psi * inv_sigmas_[i];
-    WriteJacobianRow(f, c, s, g, o, nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
+    WriteDistanceRow(i, phi, c, s, g, o, nr, &residuals[row], dz_row,
+                     jp ? jp + size_t(row) * jp_stride : nullptr);
   }
   return true;
 }
