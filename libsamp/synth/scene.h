@@ -23,7 +23,7 @@
 #include "libsamp/scan/renderer.h"
 #include "libsamp/synth/detector_model.h"
 #include "libsamp/synth/street_scene.h"
-#include "libsamp/synth/synth.h"
+#include "libsamp/synth/synth_options.h"
 
 namespace samp::synth {
 
