@@ -1,6 +1,7 @@
 // What the evaluation's stages (eval_inputs.h, matching.h) share with its
-// interface (evaluation.h): the options and the compared methods. Kept apart
-// from evaluation.h so that the stages include downwards only.
+// interface (evaluation.h): the options, the two matchings and the compared
+// methods. Kept apart from evaluation.h so that the stages include downwards
+// only.
 #pragma once
 
 #include <string>
@@ -39,6 +40,11 @@ struct EvalOptions {
   void Check() const;
   std::string ToJson() const;
 };
+
+// The two matchings (docs/evaluation.md): per track, each true car gets one
+// output track for the whole sequence; per frame, each true car at each frame
+// gets the nearest output box of any track within per_frame_distance.
+constexpr int kPerTrack = 0, kPerFrame = 1, kNumMatchings = 2;
 
 // A compared method: a baseline ("stereo", "detections") or a result folder.
 struct EvalMethod {

@@ -95,11 +95,6 @@ struct EvalSummary {
   std::string BriefReport() const;
 };
 
-// The two matchings (docs/evaluation.md): per track, each true car gets one
-// output track for the whole sequence; per frame, each true car at each frame
-// gets the nearest output box of any track within per_frame_distance.
-constexpr int kPerTrack = 0, kPerFrame = 1, kNumMatchings = 2;
-
 // One method's view of one ground-truth car-frame under one matching.
 struct MethodCarFrame {
   bool matched = false;
