@@ -23,6 +23,7 @@
 #include <ceres/cost_function.h>
 
 #include <Eigen/Core>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -103,6 +104,25 @@ class DataCost : public ceres::CostFunction {
   // The robustifier chosen by the options (mixture or Huber) at s.
   double Robust(double s, double* d_psi) const {
     return mixture_ ? MixturePsi(s, outlier_threshold_, d_psi) : HuberPsi(s, huber_, d_psi);
+  }
+
+  // What the rows of one evaluation at (z, pose) share: R, the rotation
+  // (c, s) = R_y(theta), phi_z's dense grid (ShapeLookup::DenseCached) and the
+  // camera centre in the object frame.
+  struct PoseFrame {
+    int nr;
+    double c, s;
+    const double* phi_z;
+    double o_cam[3];
+  };
+  PoseFrame AtPose(const double* z, const double* pose) const {
+    PoseFrame f;
+    f.nr = lookup_->num_components();
+    f.c = std::cos(pose[3]);
+    f.s = std::sin(pose[3]);
+    f.phi_z = lookup_->DenseCached(z);
+    CameraInObject(camera_, pose, f.c, f.s, f.o_cam);
+    return f;
   }
 
   // Point i in the object frame of pose (rotation (c, s) = R_y(theta)):

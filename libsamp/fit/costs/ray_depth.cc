@@ -45,25 +45,21 @@ bool RayDepthCost::ToRayDistance(const double* phi_z, const double* o_cam, const
 
 bool RayDepthCost::EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals,
                                 double* jz, int jz_stride, double* jp, int jp_stride) const {
-  const int nr = lookup_->num_components();
-  const double c = std::cos(pose[3]), s = std::sin(pose[3]);
-  const double* phi_z = lookup_->DenseCached(z);
-  // The camera centre in the object frame (points behind the far side).
-  double o_cam[3];
-  CameraInObject(camera_, pose, c, s, o_cam);
+  const PoseFrame at = AtPose(z, pose);
+  // at.o_cam: the camera centre in the object frame (points behind the far side).
   for (int row = 0; row < end - begin; ++row) {
     const int i = begin + row;
     double o[3], g[3];
-    PointInObject(i, pose, c, s, o);
+    PointInObject(i, pose, at.c, at.s, o);
     double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
-    double phi = lookup_->EvaluateDense(phi_z, o, jp ? g : nullptr, dz_row);
+    double phi = lookup_->EvaluateDense(at.phi_z, o, jp ? g : nullptr, dz_row);
     if (!std::isfinite(phi)) return false;
     if (phi != 0.0) {
       double u[3];
-      RayInObject(i, c, s, u);
-      ToRayDistance(phi_z, o_cam, u, &phi, o, g, dz_row);  // else: phi, g, dz_row stay phi's at o
+      RayInObject(i, at.c, at.s, u);
+      ToRayDistance(at.phi_z, at.o_cam, u, &phi, o, g, dz_row);  // else: phi, g, dz_row stay phi's at o
     }
-    WriteDistanceRow(i, phi, c, s, g, o, nr, &residuals[row], dz_row,
+    WriteDistanceRow(i, phi, at.c, at.s, g, o, at.nr, &residuals[row], dz_row,
                      jp ? jp + size_t(row) * jp_stride : nullptr);
   }
   return true;
