@@ -256,41 +256,50 @@ void WriteCalibration(const std::string& path, const StereoCalibration& calibrat
   WriteTextFileAtomically(path, "P2: " + FormatMatrixRow(p2) + "\nP3: " + FormatMatrixRow(p3) + "\n");
 }
 
-std::vector<ObjectLabel> ReadLabels(const std::string& path) {
-  const TextFile file = ReadTextFile(path, "label");
-  std::vector<ObjectLabel> labels;
+namespace {
+
+// Calls row(tokens, line_number) for each non-blank line of the label file
+// `path` after checking that it has `columns` tokens or one more (the
+// optional score); `layout` names the columns in the error message.
+template <typename Row>
+void ForEachLabelRow(const std::string& path, const char* what, size_t columns, const char* layout, Row&& row) {
+  const TextFile file = ReadTextFile(path, what);
   for (size_t i = 0; i < file.lines.size(); ++i) {
     const int n = static_cast<int>(i) + 1;
     if (IsBlank(file.lines[i])) continue;
     const std::vector<std::string> tokens = Tokenize(file.lines[i]);
-    SAMP_CHECK(tokens.size() == 15 || tokens.size() == 16)
-        << At(path, n) << tokens.size()
-        << " columns, expected 15 or 16 (type trunc occ alpha x1 y1 x2 y2 h w l x y z ry [score])";
-    labels.push_back(ParseObject(tokens, 0, path, n));
+    SAMP_CHECK(tokens.size() == columns || tokens.size() == columns + 1)
+        << At(path, n) << tokens.size() << " columns, expected " << columns << " or " << columns + 1 << " ("
+        << layout << ")";
+    row(tokens, n);
   }
+}
+
+}  // namespace
+
+std::vector<ObjectLabel> ReadLabels(const std::string& path) {
+  std::vector<ObjectLabel> labels;
+  ForEachLabelRow(path, "label", 15, "type trunc occ alpha x1 y1 x2 y2 h w l x y z ry [score]",
+                  [&](const std::vector<std::string>& tokens, int n) {
+                    labels.push_back(ParseObject(tokens, 0, path, n));
+                  });
   return labels;
 }
 
 std::vector<ObjectLabel> ReadTrackingLabels(const std::string& path) {
-  const TextFile file = ReadTextFile(path, "tracking label");
   std::vector<ObjectLabel> labels;
-  for (size_t i = 0; i < file.lines.size(); ++i) {
-    const int n = static_cast<int>(i) + 1;
-    if (IsBlank(file.lines[i])) continue;
-    const std::vector<std::string> tokens = Tokenize(file.lines[i]);
-    SAMP_CHECK(tokens.size() == 17 || tokens.size() == 18)
-        << At(path, n) << tokens.size()
-        << " columns, expected 17 or 18 (frame track_id type trunc occ alpha x1 y1 x2 y2 h w l x y "
-           "z ry [score])";
-    const int frame = ParseInt(tokens[0], path, n, "frame");
-    const int track_id = ParseInt(tokens[1], path, n, "track_id");
-    SAMP_CHECK(frame >= 0) << At(path, n) << "frame " << frame << " is negative";
-    SAMP_CHECK(track_id >= -1) << At(path, n) << "track_id " << track_id << " is below -1";
-    ObjectLabel label = ParseObject(tokens, 2, path, n);
-    label.frame = frame;
-    label.track_id = track_id;
-    labels.push_back(label);
-  }
+  ForEachLabelRow(path, "tracking label", 17,
+                  "frame track_id type trunc occ alpha x1 y1 x2 y2 h w l x y z ry [score]",
+                  [&](const std::vector<std::string>& tokens, int n) {
+                    const int frame = ParseInt(tokens[0], path, n, "frame");
+                    const int track_id = ParseInt(tokens[1], path, n, "track_id");
+                    SAMP_CHECK(frame >= 0) << At(path, n) << "frame " << frame << " is negative";
+                    SAMP_CHECK(track_id >= -1) << At(path, n) << "track_id " << track_id << " is below -1";
+                    ObjectLabel label = ParseObject(tokens, 2, path, n);
+                    label.frame = frame;
+                    label.track_id = track_id;
+                    labels.push_back(label);
+                  });
   return labels;
 }
 
