@@ -155,6 +155,28 @@ class DataCost : public ceres::CostFunction {
     WriteJacobianRow(f, c, s, g, o, nr, dz_row, pose_row);
   }
 
+  // EvaluateRows of a distance term (kPaper, kRayDepth): phi_z at each
+  // point's object-frame position o, passed through
+  // refine(i, at, &phi, o, g, dz_row) (RayDepthCost: to the distance along the
+  // ray; it may move o and rewrite g and dz_row), then WriteDistanceRow.
+  template <typename Refine>
+  bool DistanceRows(const double* z, const double* pose, int begin, int end, double* residuals, double* jz,
+                    int jz_stride, double* jp, int jp_stride, Refine&& refine) const {
+    const PoseFrame at = AtPose(z, pose);
+    for (int row = 0; row < end - begin; ++row) {
+      const int i = begin + row;
+      double o[3], g[3];
+      PointInObject(i, pose, at.c, at.s, o);
+      double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
+      double phi = lookup_->EvaluateDense(at.phi_z, o, jp ? g : nullptr, dz_row);
+      if (!std::isfinite(phi)) return false;
+      refine(i, at, &phi, o, g, dz_row);
+      WriteDistanceRow(i, phi, at.c, at.s, g, o, at.nr, &residuals[row], dz_row,
+                       jp ? jp + size_t(row) * jp_stride : nullptr);
+    }
+    return true;
+  }
+
   const ShapeLookup* lookup_;
   std::vector<double> points_;      // 3 per point (world)
   std::vector<double> rays_;        // 3 per point (unit, world, from the camera), with_rays

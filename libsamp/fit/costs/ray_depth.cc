@@ -45,24 +45,14 @@ bool RayDepthCost::ToRayDistance(const double* phi_z, const double* o_cam, const
 
 bool RayDepthCost::EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals,
                                 double* jz, int jz_stride, double* jp, int jp_stride) const {
-  const PoseFrame at = AtPose(z, pose);
   // at.o_cam: the camera centre in the object frame (points behind the far side).
-  for (int row = 0; row < end - begin; ++row) {
-    const int i = begin + row;
-    double o[3], g[3];
-    PointInObject(i, pose, at.c, at.s, o);
-    double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
-    double phi = lookup_->EvaluateDense(at.phi_z, o, jp ? g : nullptr, dz_row);
-    if (!std::isfinite(phi)) return false;
-    if (phi != 0.0) {
-      double u[3];
-      RayInObject(i, at.c, at.s, u);
-      ToRayDistance(at.phi_z, at.o_cam, u, &phi, o, g, dz_row);  // else: phi, g, dz_row stay phi's at o
-    }
-    WriteDistanceRow(i, phi, at.c, at.s, g, o, at.nr, &residuals[row], dz_row,
-                     jp ? jp + size_t(row) * jp_stride : nullptr);
-  }
-  return true;
+  return DistanceRows(z, pose, begin, end, residuals, jz, jz_stride, jp, jp_stride,
+                      [this](int i, const PoseFrame& at, double* phi, double* o, double* g, double* dz_row) {
+                        if (*phi == 0.0) return;  // phi, g, dz_row stay phi's at o
+                        double u[3];
+                        RayInObject(i, at.c, at.s, u);
+                        ToRayDistance(at.phi_z, at.o_cam, u, phi, o, g, dz_row);
+                      });
 }
 
 }  // namespace samp
