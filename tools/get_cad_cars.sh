@@ -46,6 +46,14 @@ fi
 
 die() { echo "get_cad_cars: error: $*" >&2; exit 1; }
 say() { echo "get_cad_cars: $*"; }
+# collect SRC DST WHERE: copies SRC (which must exist; WHERE names its package)
+# to DST atomically, unless DST already holds the same bytes.
+collect() {
+  [ -f "$1" ] || die "$1 missing from $3"
+  if ! cmp -s "$1" "$2"; then
+    cp "$1" "$2.tmp" && mv "$2.tmp" "$2"
+  fi
+}
 
 for tool in apt-get apt-cache dpkg-deb unzip sha256sum; do
   command -v "$tool" >/dev/null 2>&1 || die "'$tool' not found (this script needs Debian's apt/dpkg tools and unzip: apt-get install unzip)"
@@ -134,12 +142,7 @@ done
 torcs_dir="$extract/torcs-data/usr/share/games/torcs/cars"
 [ -d "$torcs_dir" ] || die "'$torcs_dir' missing: torcs-data's layout changed?"
 for name in "${torcs_cars[@]}"; do
-  src="$torcs_dir/$name/$name.acc"
-  [ -f "$src" ] || die "$src missing from torcs-data"
-  dst="$cars/torcs/$name.acc"
-  if ! cmp -s "$src" "$dst"; then
-    cp "$src" "$dst.tmp" && mv "$dst.tmp" "$dst"
-  fi
+  collect "$torcs_dir/$name/$name.acc" "$cars/torcs/$name.acc" torcs-data
 done
 
 # 4. Collect the Trigger Rally bodies from data.zip (one variant per distinct body).
@@ -158,12 +161,7 @@ else
 fi
 for body in "${trigger_bodies[@]}"; do
   for ext in obj mtl; do
-    src="$zip_dir/vehicles/${body}_wrc/${body}_wrc.$ext"
-    [ -f "$src" ] || die "$src missing from data.zip"
-    dst="$cars/trigger/${body}_wrc.$ext"
-    if ! cmp -s "$src" "$dst"; then
-      cp "$src" "$dst.tmp" && mv "$dst.tmp" "$dst"
-    fi
+    collect "$zip_dir/vehicles/${body}_wrc/${body}_wrc.$ext" "$cars/trigger/${body}_wrc.$ext" data.zip
   done
 done
 

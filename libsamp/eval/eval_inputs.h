@@ -17,7 +17,7 @@
 #include "libsamp/core/mesh.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/sequence_layout.h"
-#include "libsamp/eval/evaluation.h"
+#include "libsamp/eval/eval_options.h"
 
 namespace samp {
 class ShapeLookup;

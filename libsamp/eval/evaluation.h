@@ -26,40 +26,10 @@
 #include <utility>
 #include <vector>
 
+#include "libsamp/eval/eval_options.h"
 #include "libsamp/eval/metrics.h"
 
 namespace samp {
-
-struct EvalOptions {
-  // Synthetic sequence directories (with gt/).
-  std::vector<std::string> sequences;
-  // Results to compare: (name, folder of a `samp fit` output). The folder holds
-  // label_02/<seq>.txt and meshes/track_<id>.ply (or <seq>/label_02/..., <seq>/meshes/...).
-  std::vector<std::pair<std::string, std::string>> results;
-  // Output folder for the tables (Markdown, CSV, JSON) and the plots (PNG).
-  std::string output_folder;
-  // Thresholds tau of the shape sweep (metres, increasing) and the headline one (in the sweep).
-  std::vector<double> taus = {0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.35, 0.4, 0.45, 0.5};
-  double headline_tau = 0.2;
-  // Width of the distance windows of the pose statistics, metres.
-  double distance_window = 20.0;
-  // Car-frames whose object-map segment has fewer pixels are not evaluated.
-  int min_segment_pixels = 100;
-  // Per-track matching: a result/detection box matches a ground-truth box when
-  // their 2D IoU is at least this.
-  double min_iou = 0.3;
-  // Per-frame matching and the tracking figures: a box matches a true car
-  // when their origins are at most this far apart, metres.
-  double per_frame_distance = 2.0;
-  // Include the raw-stereo shape baseline and the input-detection pose baseline.
-  bool stereo_baseline = true;
-  bool detection_baseline = true;
-  // Threads for the per-sequence work (0 = all cores).
-  int num_threads = 0;
-
-  void Check() const;
-  std::string ToJson() const;
-};
 
 // Per method: aggregated scores over the common set.
 struct MethodShapeResult {
@@ -125,11 +95,6 @@ struct EvalSummary {
   std::string BriefReport() const;
 };
 
-// The two matchings (docs/evaluation.md): per track, each true car gets one
-// output track for the whole sequence; per frame, each true car at each frame
-// gets the nearest output box of any track within per_frame_distance.
-constexpr int kPerTrack = 0, kPerFrame = 1, kNumMatchings = 2;
-
 // One method's view of one ground-truth car-frame under one matching.
 struct MethodCarFrame {
   bool matched = false;
@@ -155,12 +120,6 @@ struct CarFrameRecord {
   int num_true_points = 0;
   Eigen::Vector3d true_size = Eigen::Vector3d::Zero();  // h, w, l
   std::vector<MethodCarFrame> methods[kNumMatchings];
-};
-
-// A compared method: a baseline ("stereo", "detections") or a result folder.
-struct EvalMethod {
-  std::string name, folder;
-  bool shape = false, pose = false;  // evaluated for shape (has surfaces), for pose
 };
 
 // What an evaluation computes, before anything is written: the summary (its

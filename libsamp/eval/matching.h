@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "libsamp/eval/eval_inputs.h"
+#include "libsamp/eval/metrics.h"
 
 namespace samp::eval {
 

@@ -29,34 +29,25 @@ const char* ErrorName(RTCError code) {
   return "unrecognised error code";
 }
 
-// Packet types and intersectors of Embree, by width.
+// Packet types and intersectors of Embree, by width, with the tile shape of
+// the camera rays of one packet.
+template <typename RayHit, void (*kIntersect)(const int*, RTCScene, RTCIntersectContext*, RayHit*), int kWidth,
+          int kHeight>
+struct PacketOf {
+  using Type = RayHit;
+  static void Intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, Type* rays) {
+    kIntersect(valid, scene, context, rays);
+  }
+  static constexpr int kTileWidth = kWidth, kTileHeight = kHeight;
+};
 template <int N>
 struct Packet;
 template <>
-struct Packet<4> {
-  using Type = RTCRayHit4;
-  static void Intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, Type* rays) {
-    rtcIntersect4(valid, scene, context, rays);
-  }
-  // Tile shape for camera rays.
-  static constexpr int kTileWidth = 2, kTileHeight = 2;
-};
+struct Packet<4> : PacketOf<RTCRayHit4, rtcIntersect4, 2, 2> {};
 template <>
-struct Packet<8> {
-  using Type = RTCRayHit8;
-  static void Intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, Type* rays) {
-    rtcIntersect8(valid, scene, context, rays);
-  }
-  static constexpr int kTileWidth = 4, kTileHeight = 2;
-};
+struct Packet<8> : PacketOf<RTCRayHit8, rtcIntersect8, 4, 2> {};
 template <>
-struct Packet<16> {
-  using Type = RTCRayHit16;
-  static void Intersect(const int* valid, RTCScene scene, RTCIntersectContext* context, Type* rays) {
-    rtcIntersect16(valid, scene, context, rays);
-  }
-  static constexpr int kTileWidth = 4, kTileHeight = 4;
-};
+struct Packet<16> : PacketOf<RTCRayHit16, rtcIntersect16, 4, 4> {};
 
 // Unit geometric normal of lane j of a packet, flipped to face the ray origin.
 template <typename PacketType>

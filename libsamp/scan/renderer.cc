@@ -27,33 +27,7 @@ RenderBuffers Render(const PinholeCamera& camera, const std::vector<PlacedMesh>&
     scene_meshes[i] = &meshes_in_camera[i];
   }
   const EmbreeScene scene(scene_meshes);
-
-  RenderBuffers buffers;
-  buffers.width = camera.width;
-  buffers.height = camera.height;
-  const size_t num_pixels = size_t(camera.width) * camera.height;
-  buffers.depth.resize(num_pixels);
-  buffers.mesh_index.resize(num_pixels);
-  buffers.triangle.resize(num_pixels);
-  buffers.normal.resize(num_pixels);
-
-  // Bands of rows (a multiple of the packet tile height) in parallel.
-  constexpr int kBandRows = 8;
-  const int num_bands = (camera.height + kBandRows - 1) / kBandRows;
-  tbb::parallel_for(tbb::blocked_range<int>(0, num_bands), [&](const tbb::blocked_range<int>& range) {
-    for (int band = range.begin(); band != range.end(); ++band) {
-      const int row_begin = band * kBandRows;
-      const int row_end = std::min(camera.height, row_begin + kBandRows);
-      const size_t offset = size_t(row_begin) * camera.width;
-      EmbreeScene::ImageOutputs outputs;
-      outputs.depth = buffers.depth.data() + offset;
-      outputs.geometry = buffers.mesh_index.data() + offset;
-      outputs.triangle = buffers.triangle.data() + offset;
-      outputs.normal = buffers.normal.data() + offset;
-      scene.IntersectCameraImage(camera, Eigen::Isometry3d::Identity(), row_begin, row_end, outputs);
-    }
-  });
-  return buffers;
+  return RenderFromScene(scene, camera, Eigen::Isometry3d::Identity());
 }
 
 std::vector<uint8_t> ShadeRender(const RenderBuffers& buffers,
@@ -100,6 +74,8 @@ RenderBuffers RenderFromScene(const EmbreeScene& scene, const PinholeCamera& cam
   buffers.mesh_index.resize(num_pixels);
   buffers.triangle.resize(num_pixels);
   buffers.normal.resize(num_pixels);
+
+  // Bands of rows (a multiple of the packet tile height) in parallel.
   constexpr int kBandRows = 8;
   const int num_bands = (camera.height + kBandRows - 1) / kBandRows;
   tbb::parallel_for(tbb::blocked_range<int>(0, num_bands), [&](const tbb::blocked_range<int>& range) {

@@ -849,6 +849,21 @@ void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
 }
 
 
+// Calls visit(u) for each of the (up to six) face neighbours u of the voxel
+// with linear index v, in the order -x, +x, -y, +y, -z, +z.
+template <typename Visit>
+void ForEachFaceNeighbour(const GridSpec& grid, int64_t v, Visit&& visit) {
+  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
+  const int64_t sy = nx, sz = int64_t(nx) * ny;
+  const int i = int(v % nx), j = int((v / nx) % ny), k = int(v / sz);
+  if (i > 0) visit(v - 1);
+  if (i < nx - 1) visit(v + 1);
+  if (j > 0) visit(v - sy);
+  if (j < ny - 1) visit(v + sy);
+  if (k > 0) visit(v - sz);
+  if (k < nz - 1) visit(v + sz);
+}
+
 // The closing of the seen surface with radius tau = radius_voxels * h
 // (docs/sdf.md, "Sign"): O = the voxels farther than tau from the surface
 // that a 6-connected flood fill reaches from the grid's border, starting at
@@ -887,22 +902,14 @@ bool ClosingOutside(const GridSpec& grid, const std::vector<float>& distance,
     }
   }
   if (queue.empty()) return false;
-  const int64_t sy = nx, sz = int64_t(nx) * ny;
   for (size_t head = 0; head < queue.size(); ++head) {
     const int64_t v = queue[head];
-    const int i = int(v % nx), j = int((v / nx) % ny), k = int(v / sz);
-    auto visit = [&](int64_t u) {
+    ForEachFaceNeighbour(grid, v, [&](int64_t u) {
       if (!fill[size_t(u)] && distance[size_t(u)] > tau) {
         fill[size_t(u)] = 1;
         queue.push_back(int32_t(u));
       }
-    };
-    if (i > 0) visit(v - 1);
-    if (i < nx - 1) visit(v + 1);
-    if (j > 0) visit(v - sy);
-    if (j < ny - 1) visit(v + sy);
-    if (k > 0) visit(v - sz);
-    if (k < nz - 1) visit(v + sz);
+    });
   }
   closed_outside->assign(n, 0);
   const int reach = int(std::ceil(radius_voxels + 1.5f));
@@ -957,8 +964,6 @@ bool ClosingOutside(const GridSpec& grid, const std::vector<float>& distance,
 // and the share of the inside voxels in the largest one (0 when none).
 void InsideComponents(const GridSpec& grid, const std::vector<uint8_t>& outside,
                       int* num_components, double* largest_share) {
-  const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
-  const int64_t sy = nx, sz = int64_t(nx) * ny;
   std::vector<uint8_t> visited(outside.size(), 0);
   std::vector<int32_t> stack;
   int64_t total = 0, largest = 0;
@@ -973,19 +978,12 @@ void InsideComponents(const GridSpec& grid, const std::vector<uint8_t>& outside,
       const int64_t v = stack.back();
       stack.pop_back();
       ++size;
-      const int i = int(v % nx), j = int((v / nx) % ny), k = int(v / sz);
-      auto visit = [&](int64_t u) {
+      ForEachFaceNeighbour(grid, v, [&](int64_t u) {
         if (!outside[size_t(u)] && !visited[size_t(u)]) {
           visited[size_t(u)] = 1;
           stack.push_back(int32_t(u));
         }
-      };
-      if (i > 0) visit(v - 1);
-      if (i < nx - 1) visit(v + 1);
-      if (j > 0) visit(v - sy);
-      if (j < ny - 1) visit(v + sy);
-      if (k > 0) visit(v - sz);
-      if (k < nz - 1) visit(v + sz);
+      });
     }
     total += size;
     largest = std::max(largest, size);

@@ -126,13 +126,11 @@ bool PlaceCar(const SynthOptions& options, MotionType motion, double min_d, doub
 }  // namespace
 
 Scene MakeCleanScene(const SynthOptions& options, const std::vector<SynthCar>& cars, int sequence_index,
-                     int* global_car_index) {
-  const uint64_t seed = Mix(options.seed, uint64_t(sequence_index));
-  Random rng(seed);
+                     uint64_t seed, Random* rng, int* global_car_index) {
   Scene scene;
   const double dt = 1.0 / options.frame_rate_hz;
-  scene.ego_speed = rng.Uniform(options.min_ego_speed, options.max_ego_speed);
-  scene.ego_yaw_rate = rng.Uniform(-options.max_ego_yaw_rate, options.max_ego_yaw_rate);
+  scene.ego_speed = rng->Uniform(options.min_ego_speed, options.max_ego_speed);
+  scene.ego_yaw_rate = rng->Uniform(-options.max_ego_yaw_rate, options.max_ego_yaw_rate);
   PlanarState ego;  // the camera's forward is the ego heading -pi/2 (world +z)
   ego.heading = -0.5 * kPi;
   for (int t = 0; t < options.num_frames; ++t) {
@@ -145,25 +143,25 @@ Scene MakeCleanScene(const SynthOptions& options, const std::vector<SynthCar>& c
   road.material = MaterialKind::kRoad;
   road.seed = Mix(seed, 1);
   scene.statics.push_back(std::move(road));
-  AddBuildings(options, &rng, seed, &scene);
+  AddBuildings(options, rng, seed, &scene);
 
-  const std::vector<int> order = ShuffledCarOrder(cars.size(), &rng);
+  const std::vector<int> order = ShuffledCarOrder(cars.size(), rng);
   const double split = std::clamp(20.0, options.min_distance, options.max_distance);
   for (int k = 0; k < options.cars_per_sequence; ++k) {
     const int g = (*global_car_index)++;
     SceneCar car = NewSceneCar(&cars[order[k % order.size()]]);
     car.track_id = k;
-    const Paint& paint = kPaints[rng.Index(int(std::size(kPaints)))];
+    const Paint& paint = kPaints[rng->Index(int(std::size(kPaints)))];
     car.paint = paint.color;
     car.paint_name = paint.name;
     const MotionType motion = MotionType(g % 3);
     const bool near = ((g / 3) % 2) == 0;
     const double lo = near ? options.min_distance : split;
     const double hi = near ? split : options.max_distance;
-    bool placed = PlaceCar(options, motion, lo, hi, scene, &rng, &car);
-    if (!placed) placed = PlaceCar(options, motion, options.min_distance, options.max_distance, scene, &rng, &car);
+    bool placed = PlaceCar(options, motion, lo, hi, scene, rng, &car);
+    if (!placed) placed = PlaceCar(options, motion, options.min_distance, options.max_distance, scene, rng, &car);
     if (!placed) placed = PlaceCar(options, MotionType::kStanding, options.min_distance,
-                                   options.max_distance, scene, &rng, &car);
+                                   options.max_distance, scene, rng, &car);
     if (!placed) {
       LogWarning() << "synth: sequence " << sequence_index << ": no free place for car " << k
                    << " (" << car.car->name << "); the sequence has fewer cars";

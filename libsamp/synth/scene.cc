@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "libsamp/fit/motion_model.h"
+#include "libsamp/synth/procedural.h"
 
 namespace samp::synth {
 namespace {
@@ -142,6 +143,15 @@ bool TakeTrajectory(const SynthOptions& options, const Scene& scene, MotionType 
   car->target_distance = d;
   car->states = std::move(states);
   return true;
+}
+
+Scene MakeScene(const SynthOptions& options, const std::vector<SynthCar>& cars, int sequence_index,
+                int* global_car_index) {
+  const uint64_t seed = procedural::Mix(options.seed, uint64_t(sequence_index));
+  Random rng(seed);
+  return options.scene == SynthScene::kStreet
+             ? MakeStreetScene(options, cars, sequence_index, seed, &rng, global_car_index)
+             : MakeCleanScene(options, cars, sequence_index, seed, &rng, global_car_index);
 }
 
 }  // namespace samp::synth

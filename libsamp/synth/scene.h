@@ -23,7 +23,7 @@
 #include "libsamp/scan/renderer.h"
 #include "libsamp/synth/detector_model.h"
 #include "libsamp/synth/street_scene.h"
-#include "libsamp/synth/synth.h"
+#include "libsamp/synth/synth_options.h"
 
 namespace samp::synth {
 
@@ -132,18 +132,17 @@ bool AcceptTrajectory(const SynthOptions& options, const Scene& scene, const Pla
 bool TakeTrajectory(const SynthOptions& options, const Scene& scene, MotionType motion, double d,
                     const PlanarState& middle_state, double speed, double yaw_rate, SceneCar* car);
 
-// The scenes of the two presets (clean_preset.cc, street_preset.cc): sequence
-// `sequence_index`, seeded by Mix(options.seed, sequence_index);
+// The scene of sequence `sequence_index` (seeded by Mix(options.seed,
+// sequence_index)) of the preset options.scene: MakeStreetScene or
+// MakeCleanScene (street_preset.cc, clean_preset.cc), which draw from `rng`
+// (seeded by `seed`) and derive their textures' seeds from `seed`.
 // *global_car_index counts the cars over the sequences (it drives the motion
 // and near/far choices).
+Scene MakeScene(const SynthOptions& options, const std::vector<SynthCar>& cars, int sequence_index,
+                int* global_car_index);
 Scene MakeCleanScene(const SynthOptions& options, const std::vector<SynthCar>& cars, int sequence_index,
-                     int* global_car_index);
+                     uint64_t seed, Random* rng, int* global_car_index);
 Scene MakeStreetScene(const SynthOptions& options, const std::vector<SynthCar>& cars, int sequence_index,
-                      int* global_car_index);
-inline Scene MakeScene(const SynthOptions& options, const std::vector<SynthCar>& cars, int sequence_index,
-                       int* global_car_index) {
-  return options.scene == SynthScene::kStreet ? MakeStreetScene(options, cars, sequence_index, global_car_index)
-                                              : MakeCleanScene(options, cars, sequence_index, global_car_index);
-}
+                      uint64_t seed, Random* rng, int* global_car_index);
 
 }  // namespace samp::synth

@@ -341,20 +341,18 @@ void PlaceTraffic(const SynthOptions& options, int sequence_index, Random* rng, 
 }  // namespace
 
 Scene MakeStreetScene(const SynthOptions& options, const std::vector<SynthCar>& cars, int sequence_index,
-                      int* global_car_index) {
-  const uint64_t seed = Mix(options.seed, uint64_t(sequence_index));
-  Random rng(seed);
+                      uint64_t seed, Random* rng, int* global_car_index) {
   Scene scene;
   scene.street = true;
-  MakeStreetEgo(options, &rng, &scene);
-  MakeStreetLighting(options, &rng, &scene);
-  AddStreetStatics(options, seed, &rng, &scene);
+  MakeStreetEgo(options, rng, &scene);
+  MakeStreetLighting(options, rng, &scene);
+  AddStreetStatics(options, seed, rng, &scene);
   CarDraw draw;
   draw.cars = &cars;
-  draw.order = ShuffledCarOrder(cars.size(), &rng);
+  draw.order = ShuffledCarOrder(cars.size(), rng);
   draw.split = std::clamp(20.0, options.min_distance, options.max_distance);
-  PlaceParkedRows(options, &rng, &draw, &scene, global_car_index);
-  PlaceTraffic(options, sequence_index, &rng, &draw, &scene, global_car_index);
+  PlaceParkedRows(options, rng, &draw, &scene, global_car_index);
+  PlaceTraffic(options, sequence_index, rng, &draw, &scene, global_car_index);
   return scene;
 }
 

@@ -9,6 +9,13 @@
 
 namespace samp {
 
+void CameraInObject(const Eigen::Vector3d& camera, const double* pose, double c, double s, double* o_cam) {
+  const double dx = camera[0] - pose[0], dy = camera[1] - pose[1], dz = camera[2] - pose[2];
+  o_cam[0] = c * dx - s * dz;
+  o_cam[1] = dy;
+  o_cam[2] = s * dx + c * dz;
+}
+
 const char* DataTermName(DataTerm term) {
   switch (term) {
     case DataTerm::kPaper: return "paper";

@@ -23,6 +23,7 @@
 #include <ceres/cost_function.h>
 
 #include <Eigen/Core>
+#include <cmath>
 #include <memory>
 #include <string>
 #include <vector>
@@ -65,6 +66,16 @@ double HuberPsi(double s, double k, double* d_psi);
 // The mixture psi with threshold s0 and d psi / ds (null: skipped).
 double MixturePsi(double s, double s0, double* d_psi);
 
+// The camera centre in the object frame of pose (rotation (c, s) = R_y(theta)).
+void CameraInObject(const Eigen::Vector3d& camera, const double* pose, double c, double s, double* o_cam);
+
+// One point's Jacobian rows from phi's derivatives at the object-frame point o
+// (R_y(theta) = (c, s)): the d/dz row (holding d phi / dz) scaled by f, and the
+// pose row from the spatial gradient g: d/dt = -f R g, d/dtheta = f g . (-o_z, 0, o_x).
+// Null rows are skipped.
+void WriteJacobianRow(double f, double c, double s, const double* g, const double* o, int nr, double* dz_row,
+                      double* pose_row);
+
 // The data-term block of one frame: Evaluate() over all points, and
 // EvaluateRows() over a range of them with strided Jacobian rows (what
 // CompressedDataCost accumulates). Holds the points and 1 / sigma_i; `lookup`
@@ -95,6 +106,77 @@ class DataCost : public ceres::CostFunction {
     return mixture_ ? MixturePsi(s, outlier_threshold_, d_psi) : HuberPsi(s, huber_, d_psi);
   }
 
+  // What the rows of one evaluation at (z, pose) share: R, the rotation
+  // (c, s) = R_y(theta), phi_z's dense grid (ShapeLookup::DenseCached) and the
+  // camera centre in the object frame.
+  struct PoseFrame {
+    int nr;
+    double c, s;
+    const double* phi_z;
+    double o_cam[3];
+  };
+  PoseFrame AtPose(const double* z, const double* pose) const {
+    PoseFrame f;
+    f.nr = lookup_->num_components();
+    f.c = std::cos(pose[3]);
+    f.s = std::sin(pose[3]);
+    f.phi_z = lookup_->DenseCached(z);
+    CameraInObject(camera_, pose, f.c, f.s, f.o_cam);
+    return f;
+  }
+
+  // Point i in the object frame of pose (rotation (c, s) = R_y(theta)):
+  // o = R_y(theta)^T (x_i - t).
+  void PointInObject(int i, const double* pose, double c, double s, double* o) const {
+    const double dx = points_[3 * i] - pose[0];
+    const double dy = points_[3 * i + 1] - pose[1];
+    const double dz = points_[3 * i + 2] - pose[2];
+    o[0] = c * dx - s * dz;
+    o[1] = dy;
+    o[2] = s * dx + c * dz;
+  }
+
+  // The unit ray of point i in the object frame: u = R_y(theta)^T w_i (with_rays).
+  void RayInObject(int i, double c, double s, double* u) const {
+    const double* w = &rays_[3 * i];
+    u[0] = c * w[0] - s * w[2];
+    u[1] = w[1];
+    u[2] = s * w[0] + c * w[2];
+  }
+
+  // The row of point i from its signed distance phi (kPaper, kRayDepth):
+  // r_i = sqrt(w/N) psi(phi / sigma_i) into *residual, and its Jacobian rows
+  // from phi's derivatives at o (WriteJacobianRow).
+  void WriteDistanceRow(int i, double phi, double c, double s, const double* g, const double* o, int nr,
+                        double* residual, double* dz_row, double* pose_row) const {
+    double d_psi = 1.0;
+    *residual = sqrt_weight_ * Robust(phi * inv_sigmas_[i], &d_psi);  // s_i = phi / sigma_i
+    const double f = sqrt_weight_ * d_psi * inv_sigmas_[i];
+    WriteJacobianRow(f, c, s, g, o, nr, dz_row, pose_row);
+  }
+
+  // EvaluateRows of a distance term (kPaper, kRayDepth): phi_z at each
+  // point's object-frame position o, passed through
+  // refine(i, at, &phi, o, g, dz_row) (RayDepthCost: to the distance along the
+  // ray; it may move o and rewrite g and dz_row), then WriteDistanceRow.
+  template <typename Refine>
+  bool DistanceRows(const double* z, const double* pose, int begin, int end, double* residuals, double* jz,
+                    int jz_stride, double* jp, int jp_stride, Refine&& refine) const {
+    const PoseFrame at = AtPose(z, pose);
+    for (int row = 0; row < end - begin; ++row) {
+      const int i = begin + row;
+      double o[3], g[3];
+      PointInObject(i, pose, at.c, at.s, o);
+      double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
+      double phi = lookup_->EvaluateDense(at.phi_z, o, jp ? g : nullptr, dz_row);
+      if (!std::isfinite(phi)) return false;
+      refine(i, at, &phi, o, g, dz_row);
+      WriteDistanceRow(i, phi, at.c, at.s, g, o, at.nr, &residuals[row], dz_row,
+                       jp ? jp + size_t(row) * jp_stride : nullptr);
+    }
+    return true;
+  }
+
   const ShapeLookup* lookup_;
   std::vector<double> points_;      // 3 per point (world)
   std::vector<double> rays_;        // 3 per point (unit, world, from the camera), with_rays
@@ -110,11 +192,5 @@ class DataCost : public ceres::CostFunction {
 std::unique_ptr<DataCost> MakeDataCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
                                        const std::vector<double>& sigmas, const DataCostOptions& options);
 
-// One point's Jacobian rows from phi's derivatives at the object-frame point o
-// (R_y(theta) = (c, s)): the d/dz row (holding d phi / dz) scaled by f, and the
-// pose row from the spatial gradient g: d/dt = -f R g, d/dtheta = f g . (-o_z, 0, o_x).
-// Null rows are skipped.
-void WriteJacobianRow(double f, double c, double s, const double* g, const double* o, int nr, double* dz_row,
-                      double* pose_row);
 
 }  // namespace samp

@@ -7,18 +7,6 @@
 
 namespace samp {
 
-namespace {
-
-// The camera centre in the object frame of pose (rotation (c, s) = R_y(theta)).
-void CameraInObject(const Eigen::Vector3d& camera, const double* pose, double c, double s, double* o_cam) {
-  const double dx = camera[0] - pose[0], dy = camera[1] - pose[1], dz = camera[2] - pose[2];
-  o_cam[0] = c * dx - s * dz;
-  o_cam[1] = dy;
-  o_cam[2] = s * dx + c * dz;
-}
-
-}  // namespace
-
 DisparityCost::DisparityCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
                              const std::vector<double>& sigmas, const DataCostOptions& options)
     : DataCost(lookup, points_in_world, sigmas, options, /*with_rays=*/true) {
@@ -71,38 +59,31 @@ RayResidual DisparityCost::Residual(int i, const double* phi_z, const double* o_
 
 bool DisparityCost::EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals,
                                  double* jz, int jz_stride, double* jp, int jp_stride) const {
-  const int nr = lookup_->num_components();
-  const double c = std::cos(pose[3]), s = std::sin(pose[3]);
-  const double* phi_z = lookup_->DenseCached(z);
-  double o_cam[3];
-  CameraInObject(camera_, pose, c, s, o_cam);
+  const PoseFrame at = AtPose(z, pose);
   for (int row = 0; row < end - begin; ++row) {
     const int i = begin + row;
-    const double* w = &rays_[3 * i];
-    const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
+    double u[3];
+    RayInObject(i, at.c, at.s, u);
     double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
     double m, o[3], g[3];
-    const RayResidual ray = Residual(i, phi_z, o_cam, u, &m, o, jp ? g : nullptr, dz_row);
+    const RayResidual ray = Residual(i, at.phi_z, at.o_cam, u, &m, o, jp ? g : nullptr, dz_row);
     if (!std::isfinite(ray.value)) return false;
     double d_psi = 1.0;
     residuals[row] = sqrt_weight_ * MixturePsi(ray.value, outlier_threshold_, &d_psi);
     const double f = sqrt_weight_ * d_psi * m;
-    WriteJacobianRow(f, c, s, g, o, nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
+    WriteJacobianRow(f, at.c, at.s, g, o, at.nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
   }
   return true;
 }
 
 std::vector<RayResidual> DisparityCost::RayResiduals(const double* z, const double* pose) const {
-  const double c = std::cos(pose[3]), s = std::sin(pose[3]);
-  const double* phi_z = lookup_->DenseCached(z);
-  double o_cam[3];
-  CameraInObject(camera_, pose, c, s, o_cam);
+  const PoseFrame at = AtPose(z, pose);
   std::vector<RayResidual> out(static_cast<size_t>(num_residuals()));
   for (int i = 0; i < num_residuals(); ++i) {
-    const double* w = &rays_[3 * i];
-    const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
+    double u[3];
+    RayInObject(i, at.c, at.s, u);
     double m, o[3];
-    out[size_t(i)] = Residual(i, phi_z, o_cam, u, &m, o, nullptr, nullptr);
+    out[size_t(i)] = Residual(i, at.phi_z, at.o_cam, u, &m, o, nullptr, nullptr);
   }
   return out;
 }

@@ -45,33 +45,14 @@ bool RayDepthCost::ToRayDistance(const double* phi_z, const double* o_cam, const
 
 bool RayDepthCost::EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals,
                                 double* jz, int jz_stride, double* jp, int jp_stride) const {
-  const int nr = lookup_->num_components();
-  const double c = std::cos(pose[3]), s = std::sin(pose[3]);
-  const double* phi_z = lookup_->DenseCached(z);
-  // The camera centre in the object frame (points behind the far side).
-  const double cx = camera_[0] - pose[0], cy = camera_[1] - pose[1], cz = camera_[2] - pose[2];
-  const double o_cam[3] = {c * cx - s * cz, cy, s * cx + c * cz};
-  for (int row = 0; row < end - begin; ++row) {
-    const int i = begin + row;
-    const double dx = points_[3 * i] - pose[0];
-    const double dy = points_[3 * i + 1] - pose[1];
-    const double dz = points_[3 * i + 2] - pose[2];
-    double o[3] = {c * dx - s * dz, dy, s * dx + c * dz};
-    double g[3];
-    double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
-    double phi = lookup_->EvaluateDense(phi_z, o, jp ? g : nullptr, dz_row);
-    if (!std::isfinite(phi)) return false;
-    if (phi != 0.0) {
-      const double* w = &rays_[3 * i];
-      const double u[3] = {c * w[0] - s * w[2], w[1], s * w[0] + c * w[2]};
-      ToRayDistance(phi_z, o_cam, u, &phi, o, g, dz_row);  // else: phi, g, dz_row stay phi's at o
-    }
-    double d_psi = 1.0;
-    residuals[row] = sqrt_weight_ * Robust(phi * inv_sigmas_[i], &d_psi);  // s_i = phi / sigma_i
-    const double f = sqrt_weight_ * d_psi * inv_sigmas_[i];
-    WriteJacobianRow(f, c, s, g, o, nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
-  }
-  return true;
+  // at.o_cam: the camera centre in the object frame (points behind the far side).
+  return DistanceRows(z, pose, begin, end, residuals, jz, jz_stride, jp, jp_stride,
+                      [this](int i, const PoseFrame& at, double* phi, double* o, double* g, double* dz_row) {
+                        if (*phi == 0.0) return;  // phi, g, dz_row stay phi's at o
+                        double u[3];
+                        RayInObject(i, at.c, at.s, u);
+                        ToRayDistance(at.phi_z, at.o_cam, u, phi, o, g, dz_row);
+                      });
 }
 
 }  // namespace samp
