@@ -34,8 +34,6 @@ void RunFitOptions::Check() const {
   SAMP_CHECK(!output_dir.empty()) << "RunFitOptions.output_dir is empty";
   SAMP_CHECK(num_threads >= 0) << "RunFitOptions.num_threads must be >= 0 (0 = all cores), is "
                                << num_threads;
-  SAMP_CHECK(!(self_calibrate && !detector_model_path.empty()))
-      << "RunFitOptions: self_calibrate and detector_model_path exclude each other (give one)";
   fit.Check();
   sequence.Check();
   calibration.Check();

@@ -66,12 +66,13 @@ struct RunFitOptions {
   // tracks of all sequences (pooled), re-link with it to a fixed point, then
   // link and fit with the estimate: the tracker's sigmas and the fit's
   // detection size sigma (unless 0 = off) and position covariance come from
-  // it. The estimate goes to OUT/detector_model.json and the summary.
-  bool self_calibrate = false;
+  // it. The estimate goes to OUT/detector_model.json and the summary. On by
+  // default (`samp fit --no-self-calibrate`: the tracker's fixed sigmas).
+  bool self_calibrate = true;
   CalibrationOptions calibration;
   // A detector model file (`samp calibrate-detector`, data/detector_noise.h)
-  // used instead of the tracker's and the fit's detector sigmas; excludes
-  // self_calibrate.
+  // used instead of the tracker's and the fit's detector sigmas and instead of
+  // self-calibration.
   std::string detector_model_path;
 
   // Throws samp::Error naming the field and the rule it broke.

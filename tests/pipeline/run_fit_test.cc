@@ -128,15 +128,18 @@ TEST(RunFit, ReplacesTheOutputOfAnEarlierRun) {
   const RunFitSummary fourth = RunFit(no_meshes);
   EXPECT_EQ(fourth.failure, "");
   EXPECT_TRUE(fourth.replaced_previous_output);
-  EXPECT_EQ(Listing(out), (std::set<std::string>{kOutputFolderMarker, "config.json", "label_02",
-                                                 "label_02/" + scene.names[0] + ".txt", "tracks.json"}));
+  // detector_model.json: the self-calibrated detector model (on by default).
+  EXPECT_EQ(Listing(out), (std::set<std::string>{kOutputFolderMarker, "config.json", "detector_model.json",
+                                                 "label_02", "label_02/" + scene.names[0] + ".txt",
+                                                 "tracks.json"}));
 
   // A failed run into a new folder is written (its tracks.json says why).
   const std::string fresh = runs + "/fresh";
   const RunFitSummary failed_fresh = RunFit(Options(scene.model, {runs + "/no_such_sequence"}, fresh));
   EXPECT_EQ(failed_fresh.failure, "every sequence failed");
   EXPECT_FALSE(failed_fresh.kept_previous_output);
-  EXPECT_EQ(Listing(fresh), (std::set<std::string>{kOutputFolderMarker, "config.json", "tracks.json"}));
+  EXPECT_EQ(Listing(fresh),
+            (std::set<std::string>{kOutputFolderMarker, "config.json", "detector_model.json", "tracks.json"}));
   EXPECT_FALSE(ReadTracksFile(fresh + "/tracks.json").sequences.at(0).ok);
   EXPECT_TRUE(Temporaries(runs).empty());
 }
@@ -358,7 +361,7 @@ namespace {
 // Self-calibration (issue 28) on the small scene: too few detections for an
 // estimate, so every term keeps the given sigmas with a note; the model and its
 // sample counts go to the summary and OUT/detector_model.json, the option to
-// config.json. Off: neither (the outputs of earlier versions).
+// config.json. Off (--no-self-calibrate): neither (the outputs of earlier versions).
 TEST(RunFitCalibration, SelfCalibrationWritesTheModel) {
   const test::BoxCarScene& scene = TheScene();
   const std::string runs = scene.Folder("calibrate");
@@ -377,7 +380,9 @@ TEST(RunFitCalibration, SelfCalibrationWritesTheModel) {
   const std::string text((std::istreambuf_iterator<char>(config)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("\"self_calibrate\": true"), std::string::npos);
 
-  const RunFitSummary off = RunFit(Options(scene.model, {scene.sequences[0]}, runs + "/off"));
+  RunFitOptions o_off = Options(scene.model, {scene.sequences[0]}, runs + "/off");
+  o_off.self_calibrate = false;  // --no-self-calibrate
+  const RunFitSummary off = RunFit(o_off);
   EXPECT_FALSE(off.detector_model_used);
   EXPECT_FALSE(fs::exists(runs + "/off/detector_model.json"));
   std::ifstream config_off(runs + "/off/config.json");
@@ -387,7 +392,8 @@ TEST(RunFitCalibration, SelfCalibrationWritesTheModel) {
 }
 
 // A detector model file replaces the tracker's sigmas; a bad one is a clear
-// error before anything is written; it excludes self-calibration.
+// error before anything is written; a given file is used instead of
+// self-calibration (which is on by default).
 TEST(RunFitCalibration, DetectorModelFile) {
   const test::BoxCarScene& scene = TheScene();
   const std::string runs = scene.Folder("detector_model");
@@ -410,7 +416,10 @@ TEST(RunFitCalibration, DetectorModelFile) {
   test::ExpectError([&] { RunFit(o); }, {"bad.json", "version 9"});
   EXPECT_FALSE(fs::exists(runs + "/bad_out"));
   o.self_calibrate = true;
-  test::ExpectError([&] { RunFit(o); }, {"self_calibrate", "detector_model_path"});
+  o.detector_model_path = runs + "/model.json";
+  o.output_dir = runs + "/file_wins";
+  const RunFitSummary file_wins = RunFit(o);
+  EXPECT_NE(file_wins.calibration_report.find("read from"), std::string::npos) << file_wins.calibration_report;
 }
 
 }  // namespace
