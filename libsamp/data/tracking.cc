@@ -321,7 +321,9 @@ class GroundHash {
     };
     return Eigen::Vector2i(index(p.x()), index(p.y()));
   }
-  static int64_t Key(const Eigen::Vector2i& c) { return (int64_t(c.x()) << 32) ^ (int64_t(c.y()) & 0xffffffff); }
+  static int64_t Key(const Eigen::Vector2i& c) {
+    return int64_t((uint64_t(int64_t(c.x())) << 32) ^ (uint64_t(int64_t(c.y())) & 0xffffffffu));
+  }
   double cell_;
   std::unordered_map<int64_t, std::vector<int>> cells_;
 };
@@ -808,7 +810,7 @@ std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& fram
     std::unordered_map<int64_t, std::vector<const ObjectLabel*>> seen;
     auto cell_key = [](double x, double z) {
       const auto i = int64_t(std::floor(std::clamp(x, -1e6, 1e6))), j = int64_t(std::floor(std::clamp(z, -1e6, 1e6)));
-      return (i << 32) ^ (j & 0xffffffff);
+      return int64_t((uint64_t(i) << 32) ^ (uint64_t(j) & 0xffffffffu));
     };
     int frame_duplicates = 0;
     for (const ObjectLabel& label : frames[f].detections) {
