@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "libsamp/core/assignment.h"
 #include "libsamp/core/json_text.h"
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"

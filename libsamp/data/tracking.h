@@ -160,11 +160,4 @@ std::vector<LinkedTrack> LinkDetections(const std::vector<FrameDetections>& fram
 std::vector<LinkedTrack> TracksFromLabels(const std::vector<ObjectLabel>& labels,
                                           int min_track_length, TrackingSummary* summary);
 
-// Minimum-cost assignment (Hungarian method, O(n^3)) on a rows x cols cost
-// matrix (row-major); entries >= kNoAssignment are forbidden. Returns for each
-// row the assigned column or -1. The assignment has the largest number of
-// allowed pairs and, among those, the least total cost.
-constexpr double kNoAssignment = 1e18;
-std::vector<int> SolveAssignment(const std::vector<double>& cost, int rows, int cols);
-
 }  // namespace samp

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <set>
 
+#include "libsamp/core/assignment.h"
 #include "libsamp/data/tracking.h"
 
 namespace samp::eval {

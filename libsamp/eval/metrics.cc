@@ -9,6 +9,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/pose.h"
+#include "libsamp/core/assignment.h"
 #include "libsamp/data/tracking.h"
 
 namespace samp {

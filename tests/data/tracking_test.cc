@@ -193,63 +193,6 @@ TEST(TrackingTest, NonIncreasingFramesAreAnError) {
   EXPECT_THROW(LinkDetections(frames, TrackerOptions(), nullptr), Error);
 }
 
-// Brute force: best (max count, then min cost) assignment.
-void BruteForce(const std::vector<double>& cost, int rows, int cols, int* best_count, double* best_cost) {
-  *best_count = -1;
-  *best_cost = 0;
-  std::vector<int> assignment(rows, -1);
-  std::vector<char> used(cols, 0);
-  std::function<void(int, int, double)> recurse = [&](int row, int count, double total) {
-    if (row == rows) {
-      if (count > *best_count || (count == *best_count && total < *best_cost - 1e-12)) {
-        *best_count = count;
-        *best_cost = total;
-      }
-      return;
-    }
-    recurse(row + 1, count, total);
-    for (int c = 0; c < cols; ++c) {
-      const double value = cost[row * cols + c];
-      if (used[c] || value >= kNoAssignment) continue;
-      used[c] = 1;
-      recurse(row + 1, count + 1, total + value);
-      used[c] = 0;
-    }
-  };
-  recurse(0, 0, 0.0);
-}
-
-TEST(TrackingTest, HungarianMatchesBruteForce) {
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<double> value(0, 10), coin(0, 1);
-  for (int trial = 0; trial < 200; ++trial) {
-    const int rows = 1 + trial % 5, cols = 1 + (trial / 5) % 6;
-    std::vector<double> cost(rows * cols);
-    for (double& c : cost) c = coin(rng) < 0.3 ? kNoAssignment : value(rng);
-    const std::vector<int> result = SolveAssignment(cost, rows, cols);
-    ASSERT_EQ(static_cast<int>(result.size()), rows);
-    int count = 0;
-    double total = 0;
-    std::vector<char> used(cols, 0);
-    for (int r = 0; r < rows; ++r) {
-      if (result[r] < 0) continue;
-      ASSERT_LT(result[r], cols);
-      ASSERT_FALSE(used[result[r]]);
-      used[result[r]] = 1;
-      ASSERT_LT(cost[r * cols + result[r]], kNoAssignment);
-      ++count;
-      total += cost[r * cols + result[r]];
-    }
-    int best_count;
-    double best_cost;
-    BruteForce(cost, rows, cols, &best_count, &best_cost);
-    EXPECT_EQ(count, best_count) << "trial " << trial;
-    EXPECT_NEAR(total, best_cost, 1e-9) << "trial " << trial;
-  }
-  EXPECT_TRUE(SolveAssignment({}, 0, 3).empty());
-  EXPECT_EQ(SolveAssignment({}, 2, 0), std::vector<int>({-1, -1}));
-}
-
 TEST(TrackingTest, TracksFromLabels) {
   auto label = [](int frame, int id, const char* type = "Car") {
     ObjectLabel l;
