@@ -1,5 +1,6 @@
 #include "libsamp/core/ply_io.h"
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -79,54 +80,92 @@ void WritePly(const std::string& path, const PointCloud& cloud) {
   }
 }
 
+PlyHeader ReadPlyHeader(std::istream& in, const std::string& what) {
+  PlyHeader header;
+  for (std::string line; std::getline(in, line);) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line == "end_header") {
+      header.complete = true;
+      break;
+    }
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "format") {
+      words >> header.format;
+    } else if (keyword == "element") {
+      PlyElement element;
+      std::string number;
+      words >> element.name >> number;
+      SAMP_CHECK(!number.empty() &&
+                 std::all_of(number.begin(), number.end(), [](char d) { return d >= '0' && d <= '9'; }))
+          << what << ": PLY element '" << element.name << "' has count '" << number << "', not a number";
+      for (size_t k = 0; k < number.size(); ++k)  // at most 18 digits kept; more saturate
+        element.count = k < 18 ? element.count * 10 + uint64_t(number[k] - '0') : uint64_t(1) << 62;
+      header.elements.push_back(std::move(element));
+    } else if (keyword == "property" && !header.elements.empty()) {
+      PlyProperty property;
+      words >> property.type;
+      if (property.type == "list") words >> property.count_type >> property.type;
+      words >> property.name;
+      header.elements.back().properties.push_back(std::move(property));
+    }
+  }
+  return header;
+}
+
+uint64_t PlyScalarBytes(const std::string& type, const std::string& what) {
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" ||
+      type == "float32")
+    return 4;
+  if (type == "double" || type == "float64") return 8;
+  SAMP_THROW() << what << ": PLY property type '" << type << "' is not a PLY type";
+}
+
 PointCloud ReadPointCloudPly(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   SAMP_CHECK(in) << "cannot open " << path;
   std::string line;
   std::getline(in, line);
   SAMP_CHECK(line == "ply") << path << ": not a PLY file";
-  std::vector<std::string> properties;
-  long long num_vertices = -1;
-  bool binary_le = false, in_vertex = false;
-  while (std::getline(in, line)) {
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line == "end_header") break;
-    std::istringstream words(line);
-    std::string keyword;
-    words >> keyword;
-    if (keyword == "format") {
-      std::string format;
-      words >> format;
-      binary_le = format == "binary_little_endian";
-    } else if (keyword == "element") {
-      std::string name;
-      long long count = 0;
-      words >> name >> count;
-      SAMP_CHECK(words && count >= 0) << path << ": malformed line \"" << line << "\"";
-      in_vertex = name == "vertex";
-      if (in_vertex) {
-        num_vertices = count;
-      } else {
-        SAMP_CHECK(count == 0) << path << ": element " << name << " is not supported in a point cloud";
-      }
-    } else if (keyword == "property" && in_vertex) {
-      std::string type, name;
-      words >> type >> name;
-      properties.push_back(type + " " + name);
+  const PlyHeader header = ReadPlyHeader(in, path);
+  SAMP_CHECK(header.complete) << path << ": no end_header";
+  SAMP_CHECK(header.format == "binary_little_endian") << path << ": only binary_little_endian PLY is read";
+  const PlyElement* vertex = nullptr;
+  for (const PlyElement& element : header.elements) {
+    if (element.name == "vertex" && vertex == nullptr) {
+      vertex = &element;
+    } else {
+      SAMP_CHECK(element.count == 0) << path << ": element " << element.name
+                                     << " is not supported in a point cloud";
     }
   }
-  SAMP_CHECK(in) << path << ": no end_header";
-  SAMP_CHECK(binary_le) << path << ": only binary_little_endian PLY is read";
-  SAMP_CHECK(num_vertices >= 0) << path << ": no vertex element";
+  SAMP_CHECK(vertex != nullptr) << path << ": no vertex element";
+  std::vector<std::string> properties;
+  for (const PlyProperty& p : vertex->properties)
+    properties.push_back(p.count_type.empty() ? p.type + " " + p.name : "list");
   const std::vector<std::string> xyz = {"float x", "float y", "float z"};
   const std::vector<std::string> xyzrgb = {"float x", "float y", "float z", "uchar red", "uchar green", "uchar blue"};
   const bool has_colors = properties == xyzrgb;
   SAMP_CHECK(has_colors || properties == xyz)
       << path << ": vertex properties must be float x y z [uchar red green blue]";
+  const uint64_t num_vertices = vertex->count;
+  uint64_t available = 0;  // bytes after the header: a count the file cannot hold is refused before allocating
+  {
+    const std::streampos here = in.tellg();
+    in.seekg(0, std::ios::end);
+    available = uint64_t(in.tellg() - here);
+    in.seekg(here);
+  }
+  const uint64_t point_bytes = has_colors ? 15 : 12;
+  SAMP_CHECK(num_vertices <= available / point_bytes)
+      << path << ": truncated: " << num_vertices << " points announced, " << available << " bytes after the header";
   PointCloud cloud;
   cloud.points.resize(size_t(num_vertices));
   if (has_colors) cloud.colors.resize(size_t(num_vertices));
-  for (long long i = 0; i < num_vertices; ++i) {
+  for (uint64_t i = 0; i < num_vertices; ++i) {
     in.read(reinterpret_cast<char*>(cloud.points[size_t(i)].data()), 3 * sizeof(float));
     if (has_colors) in.read(reinterpret_cast<char*>(cloud.colors[size_t(i)].data()), 3);
     SAMP_CHECK(in) << path << ": truncated after " << i << " of " << num_vertices << " points";

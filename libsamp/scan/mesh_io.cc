@@ -27,6 +27,7 @@
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/core/ply_io.h"
 
 namespace samp {
 namespace {
@@ -117,56 +118,25 @@ void CheckOffHeaderFitsTheFile(const std::string& path, const std::string& text,
 // error here (assimp would guess).
 void CheckPlyHeaderFitsTheFile(const std::string& path, const std::string& text, uint64_t file_bytes) {
   if (text.compare(0, 3, "ply") != 0) return;
+  const std::string what = "cannot read mesh '" + path + "'";
   const size_t end = text.find("end_header");
-  SAMP_CHECK(end != std::string::npos)
-      << "cannot read mesh '" << path << "': PLY header without end_header in its first " << text.size() << " bytes";
+  SAMP_CHECK(end != std::string::npos) << what << ": PLY header without end_header in its first " << text.size()
+                                       << " bytes";
   std::istringstream lines(text.substr(0, end));
-  bool binary = false;
-  uint64_t needed = 0, count = 0, element_bytes = 0;
-  auto finish_element = [&] { needed = SaturatingMulAdd(needed, count, std::max<uint64_t>(element_bytes, 1)); };
-  auto scalar_bytes = [&](const std::string& type) -> uint64_t {
-    if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
-    if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
-    if (type == "int" || type == "uint" || type == "float" || type == "int32" || type == "uint32" ||
-        type == "float32")
-      return 4;
-    if (type == "double" || type == "float64") return 8;
-    SAMP_THROW() << "cannot read mesh '" << path << "': PLY property type '" << type << "' is not a PLY type";
-  };
-  for (std::string line; std::getline(lines, line);) {
-    std::istringstream words(line);
-    std::string keyword;
-    words >> keyword;
-    if (keyword == "format") {
-      std::string format;
-      words >> format;
-      binary = format.rfind("binary", 0) == 0;
-    } else if (keyword == "element") {
-      finish_element();
-      std::string name, number;
-      words >> name >> number;
-      SAMP_CHECK(!number.empty() && std::all_of(number.begin(), number.end(), [](char d) { return d >= '0' && d <= '9'; }))
-          << "cannot read mesh '" << path << "': PLY element '" << name << "' has count '" << number
-          << "', not a number";
-      size_t at = 0;
-      count = DigitRun(number, &at);
-      element_bytes = 0;
-    } else if (keyword == "property") {
-      std::string type;
-      words >> type;
-      if (type == "list") {
-        std::string count_type;
-        words >> count_type;
-        element_bytes += binary ? scalar_bytes(count_type) : 2;
-      } else {
-        element_bytes += binary ? scalar_bytes(type) : 2;
-      }
-    }
+  std::string magic;
+  std::getline(lines, magic);
+  const PlyHeader header = ReadPlyHeader(lines, what);
+  const bool binary = header.format.rfind("binary", 0) == 0;
+  uint64_t needed = 0;
+  for (const PlyElement& element : header.elements) {
+    uint64_t element_bytes = 0;
+    for (const PlyProperty& p : element.properties)
+      element_bytes += binary ? PlyScalarBytes(p.count_type.empty() ? p.type : p.count_type, what) : 2;
+    needed = SaturatingMulAdd(needed, element.count, std::max<uint64_t>(element_bytes, 1));
   }
-  finish_element();
   const uint64_t body = file_bytes - std::min<uint64_t>(file_bytes, end + 10);
-  SAMP_CHECK(needed <= body) << "cannot read mesh '" << path << "': its PLY header announces elements of at least "
-                             << needed << " bytes, but the file has " << body << " after its header";
+  SAMP_CHECK(needed <= body) << what << ": its PLY header announces elements of at least " << needed
+                             << " bytes, but the file has " << body << " after its header";
 }
 
 void CheckHeaderCountsFitTheFile(const std::string& path) {
