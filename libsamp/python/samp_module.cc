@@ -47,6 +47,14 @@ namespace fs = std::filesystem;
 namespace samp::python {
 namespace {
 
+// Runs f() with the GIL released and returns its result: samp's C++ work
+// touches no Python object, so other Python threads (and Dask's) run meanwhile.
+template <typename F>
+auto WithoutGil(F&& f) {
+  py::gil_scoped_release release;
+  return f();
+}
+
 // ---------------------------------------------------------------- options
 
 // An options struct whose fields are listed by OptionFields (core/json_fields.h).
@@ -311,11 +319,7 @@ PYBIND11_MODULE(_samp, m) {
              SAMP_CHECK(z.size() == s.NumComponents())
                  << "ShapeModel.sdf: the code has " << z.size() << " values, the model "
                  << s.NumComponents() << " components";
-             Eigen::VectorXf values;
-             {
-               py::gil_scoped_release release;
-               values = s.Shape(z);
-             }
+             const Eigen::VectorXf values = WithoutGil([&] { return s.Shape(z); });
              return GridArray(s.grid, values.data());
            },
            py::arg("z"))
@@ -324,12 +328,7 @@ PYBIND11_MODULE(_samp, m) {
              SAMP_CHECK(z.size() == s.NumComponents())
                  << "ShapeModel.mesh: the code has " << z.size() << " values, the model "
                  << s.NumComponents() << " components";
-             Mesh mesh;
-             {
-               py::gil_scoped_release release;
-               mesh = ExtractSurface(s.grid, s.Shape(z), isovalue);
-             }
-             return MeshTuple(mesh);
+             return MeshTuple(WithoutGil([&] { return ExtractSurface(s.grid, s.Shape(z), isovalue); }));
            },
            py::arg("z"), py::arg("isovalue") = 0.0)
       .def("encode",
@@ -343,12 +342,7 @@ PYBIND11_MODULE(_samp, m) {
   m.def(
       "run_fit",
       [](const RunFitOptions& options) {
-        RunFitSummary summary;
-        {
-          py::gil_scoped_release release;
-          summary = RunFit(options);
-        }
-        return SummaryDict(summary);
+        return SummaryDict(WithoutGil([&] { return RunFit(options); }));
       },
       py::arg("options"), "RunFit (pipeline/run_fit.h): `samp fit` as one call; returns its summary.");
   m.def(
@@ -364,11 +358,7 @@ PYBIND11_MODULE(_samp, m) {
   m.def(
       "train",
       [](const TrainOptions& options) {
-        TrainSummary summary;
-        {
-          py::gil_scoped_release release;
-          summary = TrainShapeModel(options);
-        }
+        const TrainSummary summary = WithoutGil([&] { return TrainShapeModel(options); });
         py::dict d;
         d["num_used"] = summary.num_used;
         d["eigenvalues"] = summary.eigenvalues;
