@@ -310,10 +310,21 @@ Mesh LoadMesh(const std::string& path) {
   Assimp::Importer importer;
   // Drop lines and points entirely; keep only triangles after triangulation.
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
-  const unsigned int flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                             aiProcess_SortByPType | aiProcess_FindDegenerates |
-                             aiProcess_ValidateDataStructure;
-  const aiScene* scene = importer.ReadFile(path, flags);
+  // Read and validate first, post-process after samp's own checks (what
+  // ReadFile does with all flags at once, in the same order): assimp's
+  // validation skips faces without indices, and its triangulation then
+  // aborts the process on one (a mutated PLY did: an assertion in
+  // TriangulateProcess).
+  const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
+  if (scene == nullptr) {
+    SAMP_THROW() << "cannot read mesh '" << path << "': " << importer.GetErrorString();
+  }
+  for (unsigned int m = 0; m < scene->mNumMeshes; ++m)
+    for (unsigned int f = 0; f < scene->mMeshes[m]->mNumFaces; ++f)
+      SAMP_CHECK(scene->mMeshes[m]->mFaces[f].mNumIndices > 0)
+          << "cannot read mesh '" << path << "': face " << f << " of mesh " << m << " has no vertex indices";
+  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                       aiProcess_SortByPType | aiProcess_FindDegenerates);
   if (scene == nullptr) {
     SAMP_THROW() << "cannot read mesh '" << path << "': " << importer.GetErrorString();
   }

@@ -10,6 +10,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/ply_io.h"
 #include "test_util.h"
+#include "tests/testing/expect_error.h"
 #include "tests/testing/small_disk.h"
 
 namespace samp {
@@ -158,6 +159,20 @@ TEST(MeshIo, LoadsAsciiPlyWithQuads) {
   const Mesh mesh = LoadMesh((dir / "quad.ply").string());
   EXPECT_EQ(mesh.triangles.size(), 2u);
   EXPECT_TRUE(mesh.Bounds().max.isApprox(Eigen::Vector3d(3, 2, 0)));
+  fs::remove_all(dir);
+}
+
+// A face without vertex indices passed assimp's validation and then aborted
+// the process in its triangulation (found by tools/fuzz_cli.py on a mutated
+// PLY; tests/fuzz/regressions/mesh/abort-assimp-ply-face-without-indices).
+TEST(MeshIo, FaceWithoutIndicesIsAnErrorNotAnAbort) {
+  const fs::path dir = test::TempDir("ply_empty_face");
+  test::WriteText(dir / "empty_face.ply",
+                  "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                  "property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+                  "end_header\n0 0 0\n3 0 0\n3 2 0\n0 2 0\n0\n3 0 1 2\n");
+  test::ExpectError([&] { LoadMesh((dir / "empty_face.ply").string()); },
+                    {"empty_face.ply", "face 0 of mesh 0 has no vertex indices"});
   fs::remove_all(dir);
 }
 
