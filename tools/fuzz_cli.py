@@ -1,22 +1,35 @@
 #!/usr/bin/env python3
-"""Mutation fuzzing of the samp command line on model files (docs/reliability.md).
+"""Mutation fuzzing of the samp command line (docs/reliability.md).
 
-Runs `samp inspect MUTANT` (or another samp command line with {} for the
-file) on N mutants of a model file and checks each run: exit status 0 or 1
-(1 = samp's one-line "samp: error: ..."), never a signal, exit 2 (a usage
-error, which these runs never make), "samp: error: internal error" (an
-exception other than samp::Error), a sanitizer report or more peak memory
-than --max-rss-mb. Mutations
-(seeded): flipped bits, random bytes, runs overwritten, cut files, inserted
-and deleted bytes, edited metadata numbers (grid dims, counts), the payload
-duplicated. With --reseal each mutant's samp_file_bytes and
-samp_file_checksum are recomputed (when its file metadata still parses), as
-somebody editing a file on purpose would, so that the mutants reach samp's
-payload decoder instead of failing the checksum. Findings are copied to
+Runs a samp command line on N mutants of one input file and checks each run:
+exit status 0 or 1 (1 = samp's one-line "samp: error: ..."), never a signal,
+exit 2 (a usage error, which these runs never make), "samp: error: internal
+error" (an exception other than samp::Error), a sanitizer report, a timeout or
+more peak memory than --max-rss-mb. Mutations (seeded): flipped bits, random
+bytes, runs overwritten, cut files, inserted and deleted bytes, edited
+decimal numbers (grid dims, counts, header fields), extreme little-endian
+integers, and for text inputs tokens replaced by nan/inf/huge/negative
+values, fields dropped and lines repeated. Findings are copied to
 --findings. Prints a summary line and exits 1 on any finding.
 
-  python3 tools/fuzz_cli.py --samp build/tools/samp/samp --model models/samp_cars_r5.vdb \
+Two ways to place the mutant:
+  * a single file (--input; --model is the old name): {} in the command is
+    the mutant's path (its suffix kept: .vdb, .ply, .off, .obj, ...);
+  * a file inside a folder (--template DIR --target RELATIVE_PATH): each run
+    copies DIR, replaces RELATIVE_PATH by the mutant; {} is the copy, {out} a
+    fresh output folder beside it (a sequence's calib, detections, poses,
+    planes, image or disparity PNG under `samp fit`; a mesh among good ones
+    under `samp train`).
+
+With --reseal (model files) each mutant's samp_file_bytes and
+samp_file_checksum are recomputed (when its file metadata still parses), as
+somebody editing a file on purpose would, so that the mutants reach samp's
+payload decoder instead of failing the checksum.
+
+  python3 tools/fuzz_cli.py --samp build/tools/samp/samp --input models/samp_cars_r5.vdb \
       --runs 20000 --jobs 2 --work /tmp/samp_fuzz_cli
+  python3 tools/fuzz_cli.py --samp build/tools/samp/samp --template SEQ --target calib/000046.txt \
+      --runs 500 -- fit --seq {} --out {out} --no-meshes -q
 """
 import argparse
 import os
@@ -33,6 +46,8 @@ from concurrent.futures import ThreadPoolExecutor
 
 def mutate(data: bytes, rng: random.Random) -> bytes:
     b = bytearray(data)
+    if not b:
+        return bytes(rng.randrange(256) for _ in range(rng.randint(0, 64)))
     kind = rng.randrange(8)
     if kind == 0:  # flip 1-8 bits
         for _ in range(rng.randint(1, 8)):
@@ -64,12 +79,32 @@ def mutate(data: bytes, rng: random.Random) -> bytes:
             if rng.random() < 0.5:  # keep the length when possible
                 new = new[:len(m.group())].rjust(len(m.group()), b"0")
             b[m.start():m.end()] = new
+    elif kind == 7 and is_text(data):  # a token replaced, a field dropped or a line repeated
+        lines = bytes(b).split(b"\n")
+        k = rng.randrange(len(lines))
+        fields = lines[k].split(b" ")
+        action = rng.randrange(3)
+        if action == 0:
+            fields[rng.randrange(len(fields))] = rng.choice(
+                [b"nan", b"-nan", b"inf", b"-inf", b"1e308", b"-1e308", b"-1", b"0", b"2147483648",
+                 b"99999999999999999999", b"", b"x"])
+        elif action == 1 and len(fields) > 1:
+            del fields[rng.randrange(len(fields))]
+        else:
+            lines[k:k] = [lines[k]] * rng.randint(1, 3)
+        lines[k] = b" ".join(fields)
+        return b"\n".join(lines)
     else:  # a 4- or 8-byte little-endian integer set to an extreme
         i = rng.randrange(max(1, len(b) - 8))
         width = rng.choice([4, 8])
         v = rng.choice([0, 1, 2**31 - 1, 2**31, 2**32 - 1, 2**63 - 1, 2**63, 2**64 - 1])
         b[i:i + width] = (v % (1 << (8 * width))).to_bytes(width, "little")
     return bytes(b)
+
+
+def is_text(data: bytes) -> bool:
+    head = data[:4096]
+    return bool(head) and all(c in b"\t\n\r" or 32 <= c < 127 for c in head)
 
 
 def reseal(data: bytes) -> bytes:
@@ -121,10 +156,17 @@ def run_one(args, index, data, work):
     mutant = mutate(data, rng)
     if args.reseal:
         mutant = reseal(mutant)
-    path = os.path.join(work, f"mutant_{index % (4 * args.jobs)}_{index}.vdb")
+    out = os.path.join(work, f"out_{index}")
+    if args.template:
+        place = os.path.join(work, f"run_{index}")
+        shutil.copytree(args.template, place)
+        path = os.path.join(place, args.target)
+    else:
+        place = os.path.join(work, f"mutant_{index}{os.path.splitext(args.input)[1]}")
+        path = place
     with open(path, "wb") as f:
         f.write(mutant)
-    command = [part.replace("{}", path) for part in args.command]
+    command = [part.replace("{out}", out).replace("{}", place) for part in args.command]
     start = time.time()
     proc = subprocess.Popen([args.samp] + command, stdout=subprocess.DEVNULL,
                             stderr=subprocess.PIPE)
@@ -155,10 +197,14 @@ def run_one(args, index, data, work):
         finding = f"peak RSS {rss_mb:.0f} MB"
     if finding:
         os.makedirs(args.findings, exist_ok=True)
-        shutil.copy(path, os.path.join(args.findings, f"finding_{index}.vdb"))
+        shutil.copy(path, os.path.join(args.findings, f"finding_{index}{os.path.splitext(path)[1]}"))
         with open(os.path.join(args.findings, f"finding_{index}.txt"), "w") as f:
             f.write(f"{finding}\n{' '.join(command)}\n{err}\n")
-    os.remove(path)
+    shutil.rmtree(out, ignore_errors=True)
+    if args.template:
+        shutil.rmtree(place, ignore_errors=True)
+    else:
+        os.remove(place)
     return proc.returncode, finding, rss_mb, time.time() - start
 
 
@@ -179,7 +225,9 @@ class RusagePopen(subprocess.Popen):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--samp", required=True, help="the samp executable")
-    parser.add_argument("--model", required=True, help="the model file to mutate")
+    parser.add_argument("--input", "--model", dest="input", help="the file to mutate (alone, or --target's original)")
+    parser.add_argument("--template", help="a folder copied for each run; the mutant replaces its --target")
+    parser.add_argument("--target", help="with --template: the file (relative path) to mutate")
     parser.add_argument("--runs", type=int, default=1000)
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--seed", type=int, default=1)
@@ -192,8 +240,14 @@ def main():
     parser.add_argument("command", nargs="*", default=["inspect", "{}"],
                         help="samp arguments, {} = the mutant (default: inspect {})")
     args = parser.parse_args()
+    if bool(args.template) != bool(args.target):
+        parser.error("--template and --target go together")
+    if args.template and not args.input:
+        args.input = os.path.join(args.template, args.target)
+    if not args.input:
+        parser.error("give --input FILE or --template DIR --target FILE")
     subprocess.Popen = RusagePopen
-    with open(args.model, "rb") as f:
+    with open(args.input, "rb") as f:
         data = f.read()
     work = args.work or tempfile.mkdtemp(prefix="samp_fuzz_cli_")
     os.makedirs(work, exist_ok=True)
