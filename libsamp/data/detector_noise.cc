@@ -570,6 +570,8 @@ void BoxConventionOptions::Check() const {
   SAMP_CHECK(min_detections >= 1) << "BoxConventionOptions.min_detections must be >= 1";
   SAMP_CHECK(std::isfinite(min_significance) && min_significance >= 0)
       << "BoxConventionOptions.min_significance must be >= 0";
+  SAMP_CHECK(max_end_view_deg >= 0 && max_end_view_deg <= 90 && min_side_view_deg >= 0 && min_side_view_deg <= 90)
+      << "BoxConventionOptions.max_end_view_deg and min_side_view_deg must be in [0, 90]";
 }
 
 int EstimateBoxConvention(const std::vector<BoxConventionSample>& samples, const BoxConventionOptions& o,
@@ -579,19 +581,24 @@ int EstimateBoxConvention(const std::vector<BoxConventionSample>& samples, const
   for (double& e : model->size_bias_error) e = 0.0;
   model->along_bias = 0.0, model->along_bias_error = 0.0;
   model->box_convention_estimated = false;
-  // Per car: the detections that pass the gates (h, w, l, along differences).
-  std::map<int, std::vector<std::array<double, 4>>> of_car;
+  // Per quantity (h, w, l, along) and car: the differences of the detections
+  // that pass the gates and observe that quantity.
+  std::map<int, std::vector<double>> of_car[4];
+  std::map<int, int> cars;
   int used = 0;
   for (const BoxConventionSample& s : samples) {
     if (!(s.distance <= o.max_distance) || s.num_points < o.min_points) continue;
-    bool finite = std::isfinite(s.along);
+    bool finite = std::isfinite(s.along) && std::isfinite(s.view_angle_deg);
     for (int i = 0; i < 3; ++i) finite = finite && std::isfinite(s.detected[i] - s.fitted[i]) && s.fitted[i] > 0;
     if (!finite) continue;
-    of_car[s.car].push_back({s.detected[0] - s.fitted[0], s.detected[1] - s.fitted[1],
-                             s.detected[2] - s.fitted[2], s.along});
+    of_car[0][s.car].push_back(s.detected[0] - s.fitted[0]);
+    if (s.view_angle_deg <= o.max_end_view_deg) of_car[1][s.car].push_back(s.detected[1] - s.fitted[1]);
+    if (s.view_angle_deg >= o.min_side_view_deg) of_car[2][s.car].push_back(s.detected[2] - s.fitted[2]);
+    of_car[3][s.car].push_back(s.along);
+    ++cars[s.car];
     ++used;
   }
-  model->box_convention_tracks = static_cast<int>(of_car.size());
+  model->box_convention_tracks = static_cast<int>(cars.size());
   model->box_convention_detections = used;
   if (model->box_convention_tracks < o.min_cars || used < o.min_detections) {
     std::ostringstream note;
@@ -602,23 +609,25 @@ int EstimateBoxConvention(const std::vector<BoxConventionSample>& samples, const
     return used;
   }
   // Median per car, then the median over the cars and its standard error.
-  const double cars = double(of_car.size());
   double* bias[4] = {&model->size_bias[0], &model->size_bias[1], &model->size_bias[2], &model->along_bias};
   double* error[4] = {&model->size_bias_error[0], &model->size_bias_error[1], &model->size_bias_error[2],
                       &model->along_bias_error};
   const char* names[4] = {"height", "width", "length", "along-ray"};
   for (int k = 0; k < 4; ++k) {
-    std::vector<double> per_car;
-    for (const auto& [car, values] : of_car) {
-      std::vector<double> v;
-      for (const auto& a : values) v.push_back(a[k]);
-      per_car.push_back(Median(v));
+    if (static_cast<int>(of_car[k].size()) < o.min_cars) {
+      std::ostringstream note;
+      note << "box convention: the " << names[k] << " is observed on " << of_car[k].size() << " car(s) (need "
+           << o.min_cars << "; the width from behind or in front, the length from the side): kept at 0";
+      model->notes.push_back(note.str());
+      continue;
     }
+    std::vector<double> per_car;
+    for (const auto& [car, values] : of_car[k]) per_car.push_back(Median(values));
     const double center = Median(per_car);
     std::vector<double> deviations;
     for (double v : per_car) deviations.push_back(std::abs(v - center));
     // At least 1 cm: a handful of cars that agree exactly do not make any offset significant.
-    const double se = std::max(0.01, 1.253 * 1.4826 * Median(deviations) / std::sqrt(cars));
+    const double se = std::max(0.01, 1.253 * 1.4826 * Median(deviations) / std::sqrt(double(per_car.size())));
     *error[k] = se;
     if (std::abs(center) < o.min_significance * se) {
       std::ostringstream note;

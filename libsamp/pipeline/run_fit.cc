@@ -276,7 +276,7 @@ RunFitOptions CalibratedOptions(const RunFitOptions& options, RunFitSummary* sum
   return effective;
 }
 
-std::string BoxConventionReport(const DetectorNoiseModel& m) {
+std::string BoxConventionReport(const DetectorNoiseModel& m, bool apply_along) {
   std::ostringstream s;
   s.precision(3);
   if (!m.box_convention_estimated) {
@@ -286,7 +286,8 @@ std::string BoxConventionReport(const DetectorNoiseModel& m) {
   }
   s << "box convention (detected - shape) h/w/l " << m.size_bias[0] << "/" << m.size_bias[1] << "/" << m.size_bias[2]
     << " m (+- " << m.size_bias_error[0] << "/" << m.size_bias_error[1] << "/" << m.size_bias_error[2]
-    << "), along-ray " << m.along_bias << " m (+- " << m.along_bias_error << "), from " << m.box_convention_tracks
+    << "), along-ray " << m.along_bias << " m (+- " << m.along_bias_error << (apply_along ? "" : "; measured, not applied")
+    << "), from " << m.box_convention_tracks
     << " near cars, " << m.box_convention_detections << " detections";
   return s.str();
 }
@@ -298,12 +299,13 @@ bool HasGivenBoxBias(const FitOptions& fit) {
 
 // The fit's detection terms with the model's box convention (detected box
 // minus the shape's extent, along-ray offset), when it has one.
-void ApplyBoxConvention(const DetectorNoiseModel& model, FitOptions* fit) {
+// The along-ray bias only when `apply_along` (BoxConventionOptions::apply_along_bias).
+void ApplyBoxConvention(const DetectorNoiseModel& model, bool apply_along, FitOptions* fit) {
   if (!model.box_convention_estimated) return;
   fit->detection_height_bias = model.size_bias[0];
   fit->detection_width_bias = model.size_bias[1];
   fit->detection_length_bias = model.size_bias[2];
-  fit->detection_along_bias = model.along_bias;
+  if (apply_along) fit->detection_along_bias = model.along_bias;
 }
 
 // The box convention from the data (docs/detector_calibration.md, "Box
@@ -378,6 +380,8 @@ void EstimateRunBoxConvention(const RunFitOptions& options, const ShapeModel& sh
           const Eigen::Vector3d ray = Eigen::Vector3d(p.x(), 0.0, p.z()).normalized();
           const Eigen::Vector3d fitted_in_camera = f.world_from_camera.inverse() * ff.position;
           sample.along = (p - fitted_in_camera).dot(ray);
+          const Eigen::Vector3d axis(std::cos(f.detection.rotation_y), 0.0, -std::sin(f.detection.rotation_y));
+          sample.view_angle_deg = std::acos(std::min(1.0, std::abs(axis.dot(ray)))) * 180.0 / M_PI;
           of_track[i].push_back(sample);
         }
       });
@@ -437,11 +441,12 @@ RunFitSummary RunFit(const RunFitOptions& options) {
     if (summary.detector_model_used && detection_terms && !HasGivenBoxBias(options.fit)) {
       if (options.detector_model_path.empty() && options.calibration.estimate_box_convention) {
         EstimateRunBoxConvention(effective, *model, &arena, &summary.detector_model);
-        summary.calibration_report += "; " + BoxConventionReport(summary.detector_model);
+        summary.calibration_report +=
+            "; " + BoxConventionReport(summary.detector_model, options.calibration.box.apply_along_bias);
         for (const std::string& note : summary.detector_model.notes)
           if (note.rfind("box convention", 0) == 0) LogWarning() << "self-calibration: " << note;
       }
-      ApplyBoxConvention(summary.detector_model, &effective.fit);
+      ApplyBoxConvention(summary.detector_model, options.calibration.box.apply_along_bias, &effective.fit);
     }
     fitter = std::make_unique<TrackFitter>(*model, effective.fit);
   }

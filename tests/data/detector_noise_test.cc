@@ -414,6 +414,7 @@ TEST(BoxConvention, RecoversTheBiasesFromNearCars) {
       s.car = car;
       s.distance = 8.0 + car;
       s.num_points = 400;
+      s.view_angle_deg = 45.0;  // both an end and a side in view
       for (int i = 0; i < 3; ++i) {
         s.fitted[i] = 1.5 + i;
         s.detected[i] = s.fitted[i] + bias[i] + shape_error[i] + gross + box_noise(rng);
@@ -457,6 +458,15 @@ TEST(BoxConvention, RecoversTheBiasesFromNearCars) {
   bad["box_convention"]["along_bias_error"] = -1.0;
   test::ExpectError([&] { DetectorNoiseModelFromJson(bad.dump(), "bad.json"); },
                     {"bad.json", "along_bias_error"});
+
+  // Every car seen from the side: the width is not observed (0, with a note), the length is.
+  std::vector<BoxConventionSample> side = samples;
+  for (BoxConventionSample& s : side) s.view_angle_deg = 80.0;
+  DetectorNoiseModel side_model;
+  EstimateBoxConvention(side, options, &side_model);
+  EXPECT_EQ(side_model.size_bias[1], 0.0);
+  EXPECT_NEAR(side_model.size_bias[2], bias[2], 0.05);
+  EXPECT_NE(side_model.BriefReport().find("the width is observed on 0 car(s)"), std::string::npos);
 
   // Two cars: too few, the biases stay 0 with a note.
   std::vector<BoxConventionSample> two;

@@ -1,9 +1,10 @@
 // The box convention (issue 28; docs/detector_calibration.md, "Box
 // conventions"): a model trained on cars with mirrors (CAD extents include
 // them) fitted to detections whose boxes exclude them (KITTI's convention).
-// With self-calibration the fit estimates the width bias from the near cars
-// and the fitted shapes keep their mirrors; with the estimate off (bias 0) the
-// detection size term shrinks them, so the test can fail.
+// With the box convention estimated (samp fit --estimate-box-convention) the
+// fit measures the width bias on the near cars and the fitted shapes keep
+// their mirrors; without it (the default, bias 0) the detection size term
+// shrinks them, so the test can fail.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -164,8 +165,11 @@ TEST(BoxConvention, MirrorsExcludedFromTheBoxesDoNotShrinkTheFit) {
   const MirrorScene& scene = Scene();
   ASSERT_EQ(scene.sequences.size(), 3u);
 
-  // Self-calibration on (the default): the width bias is measured, about -2 kMirror.
-  const RunFitSummary on = RunFit(FitOptionsFor(scene, scene.root + "/fit_on"));
+  // Self-calibration (the default) with the box convention (--estimate-box-convention):
+  // the width bias is measured, about -2 kMirror.
+  RunFitOptions on_options = FitOptionsFor(scene, scene.root + "/fit_on");
+  on_options.calibration.estimate_box_convention = true;
+  const RunFitSummary on = RunFit(on_options);
   ASSERT_TRUE(on.failure.empty()) << on.BriefReport();
   const DetectorNoiseModel& model = on.detector_model;
   ASSERT_TRUE(model.box_convention_estimated) << on.calibration_report;
@@ -176,9 +180,9 @@ TEST(BoxConvention, MirrorsExcludedFromTheBoxesDoNotShrinkTheFit) {
   int tracks_on = 0;
   const double error_on = MedianWidthError(scene, scene.root + "/fit_on", &tracks_on);
 
-  // The estimate off: the biases stay 0 and the detected widths pull the shapes narrower.
+  // The estimate off (the default): the biases stay 0 and the detected widths pull the shapes narrower.
   RunFitOptions off_options = FitOptionsFor(scene, scene.root + "/fit_off");
-  off_options.calibration.estimate_box_convention = false;
+  EXPECT_FALSE(off_options.calibration.estimate_box_convention);
   const RunFitSummary off = RunFit(off_options);
   ASSERT_TRUE(off.failure.empty()) << off.BriefReport();
   EXPECT_FALSE(off.detector_model.box_convention_estimated);
