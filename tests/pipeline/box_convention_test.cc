@@ -192,6 +192,17 @@ TEST(BoxConvention, MirrorsExcludedFromTheBoxesDoNotShrinkTheFit) {
   std::cout << "fitted - true width (median over tracks): bias estimated " << error_on << " m (" << tracks_on
             << " tracks), bias 0 " << error_off << " m (" << tracks_off << " tracks); estimated width bias "
             << model.size_bias[1] << " m\n";
+  // The written model given back (--detector-model): its box convention is
+  // read and applied without a new estimate, so the shapes keep their mirrors.
+  RunFitOptions file_options = FitOptionsFor(scene, scene.root + "/fit_file");
+  file_options.detector_model_path = scene.root + "/fit_on/detector_model.json";
+  const RunFitSummary from_file = RunFit(file_options);
+  ASSERT_TRUE(from_file.failure.empty()) << from_file.BriefReport();
+  EXPECT_EQ(from_file.detector_model.size_bias[1], model.size_bias[1]);
+  int tracks_file = 0;
+  const double error_file = MedianWidthError(scene, scene.root + "/fit_file", &tracks_file);
+  EXPECT_LE(std::abs(error_file), 0.05) << "fitted - true width, box convention from the file";
+
   ASSERT_GE(tracks_on, 5);
   ASSERT_GE(tracks_off, 5);
   // Tolerance: half the model's 0.1 m voxel (the inside box's sides are the
