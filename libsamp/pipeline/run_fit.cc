@@ -16,6 +16,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/ply_io.h"
+#include "libsamp/core/pose.h"
 #include "libsamp/pipeline/fit_config.h"
 #include "libsamp/pipeline/fit_output.h"
 #include "libsamp/data/kitti_io.h"
@@ -381,7 +382,7 @@ void EstimateRunBoxConvention(const RunFitOptions& options, const ShapeModel& sh
           const Eigen::Vector3d fitted_in_camera = f.world_from_camera.inverse() * ff.position;
           sample.along = (p - fitted_in_camera).dot(ray);
           const Eigen::Vector3d axis(std::cos(f.detection.rotation_y), 0.0, -std::sin(f.detection.rotation_y));
-          sample.view_angle_deg = std::acos(std::min(1.0, std::abs(axis.dot(ray)))) * 180.0 / M_PI;
+          sample.view_angle_deg = std::acos(std::min(1.0, std::abs(axis.dot(ray)))) * 180.0 / kPi;
           of_track[i].push_back(sample);
         }
       });
