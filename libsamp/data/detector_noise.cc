@@ -1,6 +1,7 @@
 #include "libsamp/data/detector_noise.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -314,6 +315,10 @@ std::string DetectorNoiseModel::BriefReport() const {
   if (biases_estimated)
     s << " bias " << size_bias[0] << "/" << size_bias[1] << "/" << size_bias[2] << " m, along-ray bias "
       << along_bias << " m";
+  if (box_convention_estimated)
+    s << " box convention (box - shape) h/w/l " << size_bias[0] << "/" << size_bias[1] << "/" << size_bias[2]
+      << " m, along-ray " << along_bias << " m (" << box_convention_tracks << " cars, "
+      << box_convention_detections << " detections)";
   s << " (" << num_size_samples << "); yaw " << yaw_sigma_deg << " deg (" << num_yaw_samples << "); flips "
     << 100 * flip_rate << " %, misses " << 100 * miss_rate << " %, " << false_positives_per_frame
     << " false positives per frame; " << num_tracks << " tracks, " << num_frames << " frames";
@@ -335,7 +340,7 @@ std::string DetectorNoiseModel::ToJson() const {
                          {"vertical_bias", b.vertical_bias}});
   nlohmann::json size = nlohmann::json::object();
   for (int i = 0; i < 3; ++i) size[kDimensionNames[i]] = {{"sigma", size_sigma[i]}, {"bias", size_bias[i]}};
-  const nlohmann::json j = {{"format", kFormat},
+  nlohmann::json j = {{"format", kFormat},
                             {"version", kVersion},
                             {"source", source},
                             {"along_sigma_a", along_sigma_a},
@@ -359,6 +364,14 @@ std::string DetectorNoiseModel::ToJson() const {
                               {"frames", num_frames}}},
                             {"distance_bins", bins_json},
                             {"notes", notes}};
+  if (box_convention_estimated) {
+    nlohmann::json errors = nlohmann::json::object();
+    for (int i = 0; i < 3; ++i) errors[kDimensionNames[i]] = size_bias_error[i];
+    j["box_convention"] = {{"cars", box_convention_tracks},
+                           {"detections", box_convention_detections},
+                           {"size_bias_error", errors},
+                           {"along_bias_error", along_bias_error}};
+  }
   return DumpJson(j, 2);
 }
 
@@ -413,6 +426,22 @@ DetectorNoiseModel DetectorNoiseModelFromJson(const std::string& text, const std
     m.bins.push_back(bin);
   }
   f.Read("notes", &m.notes);
+  if (f.Has("box_convention")) {
+    const JsonFields box = f.Object("box_convention");
+    m.box_convention_estimated = true;
+    box.Read("cars", &m.box_convention_tracks);
+    box.Read("detections", &m.box_convention_detections);
+    const JsonFields errors = box.Object("size_bias_error");
+    for (int i = 0; i < 3; ++i) errors.Read(kDimensionNames[i], &m.size_bias_error[i]);
+    box.Read("along_bias_error", &m.along_bias_error);
+    SAMP_CHECK(m.box_convention_tracks >= 0 && m.box_convention_detections >= 0)
+        << source << ": 'box_convention' counts must be >= 0";
+    for (int i = 0; i < 3; ++i)
+      SAMP_CHECK(std::isfinite(m.size_bias_error[i]) && m.size_bias_error[i] >= 0)
+          << source << ": 'box_convention.size_bias_error' must be >= 0";
+    SAMP_CHECK(std::isfinite(m.along_bias_error) && m.along_bias_error >= 0)
+        << source << ": 'box_convention.along_bias_error' must be >= 0";
+  }
   CheckModel(m, source);
   return m;
 }
@@ -535,6 +564,86 @@ DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequ
   return model;
 }
 
+void BoxConventionOptions::Check() const {
+  SAMP_CHECK(std::isfinite(max_distance) && max_distance > 0) << "BoxConventionOptions.max_distance must be > 0";
+  SAMP_CHECK(min_points >= 1) << "BoxConventionOptions.min_points must be >= 1";
+  SAMP_CHECK(min_cars >= 1) << "BoxConventionOptions.min_cars must be >= 1";
+  SAMP_CHECK(min_detections >= 1) << "BoxConventionOptions.min_detections must be >= 1";
+  SAMP_CHECK(std::isfinite(min_significance) && min_significance >= 0)
+      << "BoxConventionOptions.min_significance must be >= 0";
+  SAMP_CHECK(max_end_view_deg >= 0 && max_end_view_deg <= 90 && min_side_view_deg >= 0 && min_side_view_deg <= 90)
+      << "BoxConventionOptions.max_end_view_deg and min_side_view_deg must be in [0, 90]";
+}
+
+int EstimateBoxConvention(const std::vector<BoxConventionSample>& samples, const BoxConventionOptions& o,
+                          DetectorNoiseModel* model) {
+  o.Check();
+  for (double& b : model->size_bias) b = 0.0;
+  for (double& e : model->size_bias_error) e = 0.0;
+  model->along_bias = 0.0, model->along_bias_error = 0.0;
+  model->box_convention_estimated = false;
+  // Per quantity (h, w, l, along) and car: the differences of the detections
+  // that pass the gates and observe that quantity.
+  std::map<int, std::vector<double>> of_car[4];
+  std::map<int, int> cars;
+  int used = 0;
+  for (const BoxConventionSample& s : samples) {
+    if (!(s.distance <= o.max_distance) || s.num_points < o.min_points) continue;
+    bool finite = std::isfinite(s.along) && std::isfinite(s.view_angle_deg);
+    for (int i = 0; i < 3; ++i) finite = finite && std::isfinite(s.detected[i] - s.fitted[i]) && s.fitted[i] > 0;
+    if (!finite) continue;
+    of_car[0][s.car].push_back(s.detected[0] - s.fitted[0]);
+    if (s.view_angle_deg <= o.max_end_view_deg) of_car[1][s.car].push_back(s.detected[1] - s.fitted[1]);
+    if (s.view_angle_deg >= o.min_side_view_deg) of_car[2][s.car].push_back(s.detected[2] - s.fitted[2]);
+    of_car[3][s.car].push_back(s.along);
+    ++cars[s.car];
+    ++used;
+  }
+  model->box_convention_tracks = static_cast<int>(cars.size());
+  model->box_convention_detections = used;
+  if (model->box_convention_tracks < o.min_cars || used < o.min_detections) {
+    std::ostringstream note;
+    note << "box convention: " << model->box_convention_tracks << " car(s) and " << used
+         << " detection(s) within " << o.max_distance << " m with >= " << o.min_points << " points (need "
+         << o.min_cars << " and " << o.min_detections << "): the box biases kept at 0";
+    model->notes.push_back(note.str());
+    return used;
+  }
+  // Median per car, then the median over the cars and its standard error.
+  double* bias[4] = {&model->size_bias[0], &model->size_bias[1], &model->size_bias[2], &model->along_bias};
+  double* error[4] = {&model->size_bias_error[0], &model->size_bias_error[1], &model->size_bias_error[2],
+                      &model->along_bias_error};
+  const char* names[4] = {"height", "width", "length", "along-ray"};
+  for (int k = 0; k < 4; ++k) {
+    if (static_cast<int>(of_car[k].size()) < o.min_cars) {
+      std::ostringstream note;
+      note << "box convention: the " << names[k] << " is observed on " << of_car[k].size() << " car(s) (need "
+           << o.min_cars << "; the width from behind or in front, the length from the side): kept at 0";
+      model->notes.push_back(note.str());
+      continue;
+    }
+    std::vector<double> per_car;
+    for (const auto& [car, values] : of_car[k]) per_car.push_back(Median(values));
+    const double center = Median(per_car);
+    std::vector<double> deviations;
+    for (double v : per_car) deviations.push_back(std::abs(v - center));
+    // At least 1 cm: a handful of cars that agree exactly do not make any offset significant.
+    const double se = std::max(0.01, 1.253 * 1.4826 * Median(deviations) / std::sqrt(double(per_car.size())));
+    *error[k] = se;
+    if (std::abs(center) < o.min_significance * se) {
+      std::ostringstream note;
+      note << "box convention: the " << names[k] << " bias " << center << " m is within " << o.min_significance
+           << " standard errors (" << se << " m) of 0: kept at 0";
+      model->notes.push_back(note.str());
+      *bias[k] = 0.0;
+    } else {
+      *bias[k] = center;
+    }
+  }
+  model->box_convention_estimated = true;
+  return used;
+}
+
 DetectorNoiseModel EstimateDetectorNoiseFromTruth(const std::vector<MatchedDetection>& matches, int num_missed,
                                                   int num_false_positives, int num_frames,
                                                   const DetectorNoiseOptions& o, const TrackerOptions& defaults) {
@@ -575,6 +684,7 @@ void CalibrationOptions::Check() const {
   SAMP_CHECK(max_iterations >= 1) << "CalibrationOptions.max_iterations must be >= 1";
   SAMP_CHECK(tolerance > 0) << "CalibrationOptions.tolerance must be > 0";
   SAMP_CHECK(tracker_sigma_scale >= 1.0) << "CalibrationOptions.tracker_sigma_scale must be >= 1";
+  box.Check();
 }
 
 std::string CalibrationResult::BriefReport() const {

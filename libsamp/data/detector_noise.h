@@ -61,6 +61,14 @@ struct DetectorNoiseModel {
   // without its detection; false positives per frame.
   double flip_rate = 0.0, miss_rate = 0.0, false_positives_per_frame = 0.0;
   bool biases_estimated = false;
+  // The box convention as self-calibration measures it (EstimateBoxConvention):
+  // size_bias and along_bias are then the detector's box minus the fitted
+  // shape's extent and position; the counts of cars and detections used and
+  // the standard errors. In the JSON as "box_convention" only when measured.
+  bool box_convention_estimated = false;
+  int box_convention_tracks = 0, box_convention_detections = 0;
+  double size_bias_error[3] = {0.0, 0.0, 0.0};
+  double along_bias_error = 0.0;
   // Sample counts: detections used for the position, size and yaw terms,
   // tracks (or true cars), frames.
   int num_position_samples = 0, num_size_samples = 0, num_yaw_samples = 0;
@@ -115,6 +123,59 @@ struct LinkedSequence {
 DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequences,
                                          const DetectorNoiseOptions& options, const TrackerOptions& defaults);
 
+// The box convention (docs/detector_calibration.md, "Box conventions"): how a
+// detector's boxes differ on average from the shape model's extents (KITTI's
+// exclude the mirrors that CAD extents include) and positions. Measured on
+// near, well-observed cars: each is fitted to its points alone (no detection
+// terms), and the fitted shape's inside box and origin are compared with the
+// car's detections. One sample per such detection:
+struct BoxConventionSample {
+  int car = 0;                          // groups one car's detections (unique over the run)
+  double distance = 0.0;                // horizontal distance of the detection, m
+  int num_points = 0;                   // stereo points associated with the car in that frame
+  double detected[3] = {0, 0, 0};       // the box's h, w, l, m
+  double fitted[3] = {0, 0, 0};         // the fitted shape's inside box h, w, l, m
+  double along = 0.0;                   // detected - fitted bottom centre along the horizontal ray, m
+  // Angle between the car's length axis and its horizontal viewing ray, in
+  // [0, 90] degrees: 0 = seen from behind or in front, 90 = from the side.
+  double view_angle_deg = 0.0;
+};
+
+struct BoxConventionOptions {
+  // A detection is used when its car is within this horizontal distance (m) ...
+  double max_distance = 20.0;
+  // ... and at least this many stereo points were associated in its frame.
+  int min_points = 200;
+  // The estimate needs this many cars and detections, else the biases stay 0 (noted).
+  int min_cars = 3;
+  int min_detections = 20;
+  // A dimension is compared only where the points observe it: the width when
+  // the car's rear or front faces the camera (view angle <= this), ...
+  double max_end_view_deg = 60.0;
+  // ... the length when its side does (view angle >= this); the height and the
+  // position always.
+  double min_side_view_deg = 30.0;
+  // A bias smaller than this many standard errors is taken as 0 (noted).
+  double min_significance = 2.0;
+  // Apply the along-ray bias to the fit (it is always measured and reported).
+  // Off by default: a fit to stereo points alone has its own along-ray bias
+  // (SGBM's foreground fattening pulls it towards the camera), which this
+  // estimate cannot tell from the detector's (docs/detector_calibration.md).
+  bool apply_along_bias = false;
+  void Check() const;  // throws samp::Error naming the field
+};
+
+// Sets model->size_bias, along_bias, their errors and counts and
+// box_convention_estimated from the samples that pass the options' gates:
+// per car the median difference, then over the cars the median, with the
+// standard error 1.253 x 1.4826 MAD / sqrt(cars) (the cars are the independent
+// samples: a car's detections share its fitted shape); the width and length
+// only from the detections whose view observes them. Too few cars or
+// detections (overall, or for one dimension), or an insignificant bias: 0 and
+// a note. Returns the number of samples used.
+int EstimateBoxConvention(const std::vector<BoxConventionSample>& samples, const BoxConventionOptions& options,
+                          DetectorNoiseModel* model);
+
 // A detection and its true box (camera frame of its frame); truth_id groups a car.
 struct MatchedDetection {
   ObjectLabel detection, truth;
@@ -139,6 +200,15 @@ struct CalibrationOptions {
   // The tracker's sigmas are the estimate times this (>= 1: the tracker's
   // filter assumes white noise, a detector's errors are correlated in time).
   double tracker_sigma_scale = 1.25;
+  // samp fit (`--estimate-box-convention`): estimate the box convention
+  // (EstimateBoxConvention) from a first fit of the near, well-observed cars
+  // to their points alone, and refit every car with it. Off by default: on
+  // the street benchmark's SGBM sequences those points-only fits are
+  // themselves ~0.2 m off in width, length and along the ray, which the
+  // estimate cannot tell from the detector's convention (measured in
+  // docs/detector_calibration.md, "Box conventions").
+  bool estimate_box_convention = false;
+  BoxConventionOptions box;
   void Check() const;
 };
 

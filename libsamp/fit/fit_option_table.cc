@@ -81,6 +81,16 @@ OptionTable<FitOptions> MakeFitTable() {
   t.Add("detection_size_sigma", &F::detection_size_sigma,
         "std. dev. of the detected length, height and width, which observe the shape, m; 0 = off (the paper)")
       .NonNegative();
+  t.AddOptional("detection_length_bias", &F::detection_length_bias,
+                "the detector's box convention: detected length minus the shape's, m (self-calibration "
+                "estimates it)");
+  t.AddOptional("detection_height_bias", &F::detection_height_bias,
+                "the detector's box convention: detected height minus the shape's, m");
+  t.AddOptional("detection_width_bias", &F::detection_width_bias,
+                "the detector's box convention: detected width minus the shape's, m (KITTI boxes exclude "
+                "the mirrors: < 0)");
+  t.AddOptional("detection_along_bias", &F::detection_along_bias,
+                "the detector's systematic error of the box position along the viewing ray, m (> 0: too far)");
   t.Add("detection_correlation_frames", &F::detection_correlation_frames,
         "tau of the detector's AR(1) errors exp(-1/tau), frames; 0 = independent")
       .NonNegative()

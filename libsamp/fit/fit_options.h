@@ -81,6 +81,16 @@ struct FitOptions {
   // stereo 3D detector's ~0.3 m (the synthetic detector model's,
   // docs/synthetic.md; the tracker's TrackerOptions::size_sigma).
   double detection_size_sigma = 0.3;
+  // The detector's box convention (docs/detector_calibration.md, "Box
+  // conventions"; costs/detection_size.h): its box minus the shape's inside
+  // box, per dimension, m (KITTI's boxes exclude the mirrors that CAD extents
+  // include: a width bias < 0). samp fit's self-calibration estimates them.
+  double detection_length_bias = 0.0;
+  double detection_height_bias = 0.0;
+  double detection_width_bias = 0.0;
+  // The detector's systematic error of the bottom centre along the horizontal
+  // viewing ray, m (> 0: boxes too far away; costs/detection_position.h).
+  double detection_along_bias = 0.0;
   // The detections' box positions as observations of the poses
   // (docs/fitting.md, "Detected position"; costs/detection_position.h), with
   // the detector noise model's covariance (TrackFrame::detection_covariance:

@@ -31,6 +31,8 @@ void AddDetectionSizeTerms(const ShapeLookup& lookup, const Track& track, const 
   constexpr double kStep = 0.5;
   // Single-frame codes that are equal (all of them in the first solve, from
   // the mean) share one linearisation: 2R + 1 box evaluations each.
+  const Eigen::Vector3d bias(options.detection_length_bias, options.detection_height_bias,
+                             options.detection_width_bias);  // the box's x, y, z as `detected`
   Eigen::VectorXd linearised_code;
   ShapeLookup::BoxSizeLinearisation lin;
   bool have_lin = false;
@@ -47,10 +49,20 @@ void AddDetectionSizeTerms(const ShapeLookup& lookup, const Track& track, const 
       }
       if (!have_lin) continue;
       problem->AddResidualBlock(DetectionSizeCost::Create(state->codes[c], lin.size, lin.jacobian, detected,
-                                                          options.detection_size_sigma, per_frame),
+                                                          options.detection_size_sigma, per_frame, bias),
                                 nullptr, state->codes[c].data());
     }
   }
+}
+
+// The detector's along-ray bias of frame f's detection as an offset in the
+// world (costs/detection_position.h): along the horizontal viewing ray.
+Eigen::Vector3d DetectionBiasInWorld(const TrackFrame& f, const FitOptions& options) {
+  if (options.detection_along_bias == 0.0) return Eigen::Vector3d::Zero();
+  const Eigen::Vector3d& p = f.detection.position;
+  const Eigen::Vector3d ray(p.x(), 0.0, p.z());
+  if (!(ray.norm() > 1e-9)) return Eigen::Vector3d::Zero();
+  return options.detection_along_bias * (f.world_from_camera.linear() * ray.normalized());
 }
 
 // The motion term from frame k - 1 into frame k (joint mode, k >= 1), with
@@ -151,7 +163,7 @@ int BuildTrackProblem(const ShapeLookup& lookup, const Track& track, const std::
       const Eigen::Matrix3d& r = f.world_from_camera.linear();
       problem->AddResidualBlock(DetectionPositionCost::Create(f.world_from_camera * f.detection.position,
                                                               r * f.detection_covariance * r.transpose(),
-                                                              position_weight),
+                                                              position_weight, DetectionBiasInWorld(f, options)),
                                 nullptr, pose);
     }
     // One frame (T = 1): no motion term and no velocities; the joint problem

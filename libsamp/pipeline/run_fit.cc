@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <memory>
@@ -15,6 +16,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/core/ply_io.h"
+#include "libsamp/core/pose.h"
 #include "libsamp/pipeline/fit_config.h"
 #include "libsamp/pipeline/fit_output.h"
 #include "libsamp/data/kitti_io.h"
@@ -275,6 +277,136 @@ RunFitOptions CalibratedOptions(const RunFitOptions& options, RunFitSummary* sum
   return effective;
 }
 
+std::string BoxConventionReport(const DetectorNoiseModel& m, bool apply_along) {
+  std::ostringstream s;
+  s.precision(3);
+  if (!m.box_convention_estimated) {
+    s << "box convention not estimated (" << m.box_convention_tracks << " near cars, " << m.box_convention_detections
+      << " detections): biases 0";
+    return s.str();
+  }
+  s << "box convention (detected - shape) h/w/l " << m.size_bias[0] << "/" << m.size_bias[1] << "/" << m.size_bias[2]
+    << " m (+- " << m.size_bias_error[0] << "/" << m.size_bias_error[1] << "/" << m.size_bias_error[2]
+    << "), along-ray " << m.along_bias << " m (+- " << m.along_bias_error << (apply_along ? "" : "; measured, not applied")
+    << "), from " << m.box_convention_tracks
+    << " near cars, " << m.box_convention_detections << " detections";
+  return s.str();
+}
+
+bool HasGivenBoxBias(const FitOptions& fit) {
+  return fit.detection_length_bias != 0.0 || fit.detection_height_bias != 0.0 || fit.detection_width_bias != 0.0 ||
+         fit.detection_along_bias != 0.0;
+}
+
+// The fit's detection terms with the model's box convention (detected box
+// minus the shape's extent, along-ray offset), when it has one.
+// The along-ray bias only when `apply_along` (BoxConventionOptions::apply_along_bias).
+void ApplyBoxConvention(const DetectorNoiseModel& model, bool apply_along, FitOptions* fit) {
+  if (!model.box_convention_estimated) return;
+  fit->detection_height_bias = model.size_bias[0];
+  fit->detection_width_bias = model.size_bias[1];
+  fit->detection_length_bias = model.size_bias[2];
+  if (apply_along) fit->detection_along_bias = model.along_bias;
+}
+
+// The box convention from the data (docs/detector_calibration.md, "Box
+// conventions"): every sequence's near, well-observed cars (a frame within
+// calibration.box.max_distance with at least min_points candidate points) are
+// fitted to their points alone (no detection terms); their shapes' inside
+// boxes and origins are compared with their detections (EstimateBoxConvention),
+// which sets the model's biases. Sequences that cannot be read and tracks
+// that fail are left out (they fail again, with their message, in the fit).
+void EstimateRunBoxConvention(const RunFitOptions& options, const ShapeModel& shape_model, tbb::task_arena* arena,
+                              DetectorNoiseModel* model) {
+  const auto start = std::chrono::steady_clock::now();
+  const BoxConventionOptions& box = options.calibration.box;
+  FitOptions points_only = options.fit;
+  points_only.detection_size_sigma = 0.0;
+  points_only.detection_position = false;
+  points_only.detection_length_bias = points_only.detection_height_bias = points_only.detection_width_bias = 0.0;
+  points_only.detection_along_bias = 0.0;
+  points_only.keep_points = false;
+  const TrackFitter fitter(shape_model, points_only);
+  const int num_sequences = int(options.sequences.size());
+  std::vector<std::vector<BoxConventionSample>> samples_of_sequence(num_sequences);
+  std::vector<int> fitted_of_sequence(num_sequences, 0);
+  auto horizontal_distance = [](const ObjectLabel& d) { return std::hypot(d.position.x(), d.position.z()); };
+  arena->execute([&] {
+    tbb::parallel_for(0, num_sequences, [&](int s) {
+      std::vector<Track> tracks;
+      try {
+        SequenceOptions seq_options = options.sequence;
+        if (!options.tracking_labels.empty()) seq_options.tracking_labels_path = options.tracking_labels[s];
+        SequenceSummary ignored;
+        tracks = LoadSequenceTracks(options.sequences[s], seq_options, &ignored);
+      } catch (const std::exception& e) {
+        LogWarning() << "box convention: sequence " << options.sequences[s] << " left out: " << e.what();
+        return;
+      }
+      std::vector<size_t> near;
+      for (size_t t = 0; t < tracks.size(); ++t) {
+        for (const TrackFrame& f : tracks[t].frames) {
+          if (horizontal_distance(f.detection) <= box.max_distance &&
+              int(f.candidate_points_in_world.size()) >= box.min_points) {
+            near.push_back(t);
+            break;
+          }
+        }
+      }
+      std::vector<std::vector<BoxConventionSample>> of_track(near.size());
+      tbb::parallel_for(size_t(0), near.size(), [&](size_t i) {
+        const Track& track = tracks[near[i]];
+        TrackFit fit;
+        try {
+          fit = fitter.Fit(track);
+        } catch (const std::exception&) {
+          return;  // fails again in the fit, with its message
+        }
+        if (!fit.summary.UnusableReason().empty() || fit.frames.size() != track.frames.size()) return;
+        for (size_t k = 0; k < track.frames.size(); ++k) {
+          const TrackFrame& f = track.frames[k];
+          const FrameFit& ff = fit.frames[k];
+          const Eigen::VectorXd& z = fit.single_frame ? ff.shape_code : fit.shape_code;
+          const AlignedBox inside = fitter.lookup().InsideBox(z);
+          if (inside.IsEmpty()) continue;
+          const Eigen::Vector3d extent = inside.Size();  // l h w (object x y z)
+          BoxConventionSample sample;
+          sample.car = s * 1000000 + track.id;
+          sample.distance = horizontal_distance(f.detection);
+          sample.num_points = ff.num_points;
+          sample.detected[0] = f.detection.height, sample.detected[1] = f.detection.width;
+          sample.detected[2] = f.detection.length;
+          sample.fitted[0] = extent.y(), sample.fitted[1] = extent.z(), sample.fitted[2] = extent.x();
+          const Eigen::Vector3d p = f.detection.position;
+          const Eigen::Vector3d ray = Eigen::Vector3d(p.x(), 0.0, p.z()).normalized();
+          const Eigen::Vector3d fitted_in_camera = f.world_from_camera.inverse() * ff.position;
+          sample.along = (p - fitted_in_camera).dot(ray);
+          const Eigen::Vector3d axis(std::cos(f.detection.rotation_y), 0.0, -std::sin(f.detection.rotation_y));
+          sample.view_angle_deg = std::acos(std::min(1.0, std::abs(axis.dot(ray)))) * 180.0 / kPi;
+          of_track[i].push_back(sample);
+        }
+      });
+      for (const auto& samples : of_track) {
+        fitted_of_sequence[s] += !samples.empty();
+        samples_of_sequence[s].insert(samples_of_sequence[s].end(), samples.begin(), samples.end());
+      }
+    });
+  });
+  std::vector<BoxConventionSample> samples;
+  int cars = 0;
+  for (int s = 0; s < num_sequences; ++s) {
+    samples.insert(samples.end(), samples_of_sequence[s].begin(), samples_of_sequence[s].end());
+    cars += fitted_of_sequence[s];
+  }
+  const int used = EstimateBoxConvention(samples, box, model);
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  LogInfo() << "box convention: " << cars << " near car(s) fitted to their points alone, " << used << " of "
+            << samples.size() << " detections used, " << seconds << " s: "
+            << (model->box_convention_estimated ? "estimated" : "not estimated") << " (box - shape h/w/l "
+            << model->size_bias[0] << "/" << model->size_bias[1] << "/" << model->size_bias[2] << " m, along-ray "
+            << model->along_bias << " m)";
+}
+
 }  // namespace
 
 std::string SequenceOutputName(const std::string& directory) {
@@ -299,11 +431,24 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   RunFitSummary summary;
   // The options the sequences are linked and fitted with (the detector's
   // sigmas calibrated when asked); `options` is what config.json records.
-  const RunFitOptions effective = CalibratedOptions(options, &summary);
+  RunFitOptions effective = CalibratedOptions(options, &summary);
+  tbb::task_arena arena(options.num_threads > 0 ? options.num_threads : tbb::task_arena::automatic);
   std::unique_ptr<ShapeModel> model;
   std::unique_ptr<TrackFitter> fitter;
   if (!options.link_only) {
     model = std::make_unique<ShapeModel>(ShapeModel::Load(options.model_path));
+    // The box convention: given biases win; a model file's is applied; self-calibration measures it.
+    const bool detection_terms = options.fit.detection_size_sigma > 0 || options.fit.detection_position;
+    if (summary.detector_model_used && detection_terms && !HasGivenBoxBias(options.fit)) {
+      if (options.detector_model_path.empty() && options.calibration.estimate_box_convention) {
+        EstimateRunBoxConvention(effective, *model, &arena, &summary.detector_model);
+        summary.calibration_report +=
+            "; " + BoxConventionReport(summary.detector_model, options.calibration.box.apply_along_bias);
+        for (const std::string& note : summary.detector_model.notes)
+          if (note.rfind("box convention", 0) == 0) LogWarning() << "self-calibration: " << note;
+      }
+      ApplyBoxConvention(summary.detector_model, options.calibration.box.apply_along_bias, &effective.fit);
+    }
     fitter = std::make_unique<TrackFitter>(*model, effective.fit);
   }
   // Every file goes into `staged`, which replaces output_dir at the end.
@@ -318,7 +463,6 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   }
 
   std::vector<SequenceWork> work(options.sequences.size());
-  tbb::task_arena arena(options.num_threads > 0 ? options.num_threads : tbb::task_arena::automatic);
   arena.execute([&] {
     tbb::parallel_for(size_t(0), work.size(), [&](size_t i) { FitSequence(effective, folder, fitter.get(), i, &work[i]); });
   });

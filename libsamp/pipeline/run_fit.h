@@ -66,13 +66,19 @@ struct RunFitOptions {
   // tracks of all sequences (pooled), re-link with it to a fixed point, then
   // link and fit with the estimate: the tracker's sigmas and the fit's
   // detection size sigma (unless 0 = off) and position covariance come from
-  // it. The estimate goes to OUT/detector_model.json and the summary. On by
-  // default (`samp fit --no-self-calibrate`: the tracker's fixed sigmas).
+  // it. Then the box convention (detected box minus the shape's extent, and
+  // an along-ray offset; calibration.box, docs/detector_calibration.md "Box
+  // conventions"): the near, well-observed cars are fitted to their points
+  // alone, compared with their detections, and every car is fitted with the
+  // estimate (unless calibration.estimate_box_convention is false or the fit
+  // options give a bias). The estimate goes to OUT/detector_model.json and the
+  // summary. On by default (`samp fit --no-self-calibrate`: the tracker's
+  // fixed sigmas, no box convention).
   bool self_calibrate = true;
   CalibrationOptions calibration;
   // A detector model file (`samp calibrate-detector`, data/detector_noise.h)
   // used instead of the tracker's and the fit's detector sigmas and instead of
-  // self-calibration.
+  // self-calibration; its box convention, when it has one, is applied too.
   std::string detector_model_path;
 
   // Throws samp::Error naming the field and the rule it broke.

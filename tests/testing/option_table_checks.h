@@ -63,7 +63,12 @@ void ExpectEveryFieldWired(const OptionTable<S>& table, const std::string& prefi
     if (defaults.count(i.name)) continue;
     S changed;
     for (const OptionBinding& b : table.Bind(&changed)) {
-      if (b.info.name == i.name && b.info.kind == OptionKind::kFlag) *b.flag = !*b.flag;
+      if (b.info.name != i.name) continue;
+      if (b.info.kind == OptionKind::kFlag) {
+        *b.flag = !*b.flag;
+      } else {
+        b.set(OtherValue(i));
+      }
     }
     std::map<std::string, std::string> leaves;
     JsonLeaves(OptionsToJson(changed), "", &leaves);

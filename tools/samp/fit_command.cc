@@ -75,6 +75,10 @@ void RegisterFitCommand(CLI::App* app) {
                     "smoothed tracks, to a fixed point) and link and fit with it; writes OUT/detector_model.json "
                     "(docs/detector_calibration.md)")
       ->capture_default_str();
+  command->add_flag("--estimate-box-convention", o.calibration.estimate_box_convention,
+                    "With self-calibration: measure the detector's box convention (detected box minus the shape's "
+                    "extent, e.g. KITTI boxes without mirrors) on the near, well-observed cars fitted to their "
+                    "points alone, and fit every car with it (docs/detector_calibration.md, \"Box conventions\")");
   command->add_option("--detector-model", o.detector_model_path,
                       "A detector model JSON (samp calibrate-detector) giving the tracker's and the fit's "
                       "detector sigmas (instead of --tracker-*-sigma and --self-calibrate)")

@@ -2,9 +2,13 @@
 // not in the paper; docs/fitting.md, "Detected position"): a 3D detector measures each car's bottom centre p_det
 // with covariance Sigma (world frame; TrackFrame::detection_covariance, the
 // detector noise model the tracker gates with), so
-//   E_position = w * (t - p_det)^T Sigma^-1 (t - p_det),
-//   residual = sqrt(w) U (t - p_det),  U^T U = Sigma^-1 (Cholesky),
-//   d residual / d(t, theta) = sqrt(w) (U, 0).
+//   E_position = w * (t + b - p_det)^T Sigma^-1 (t + b - p_det),
+//   residual = sqrt(w) U (t + b - p_det),  U^T U = Sigma^-1 (Cholesky),
+//   d residual / d(t, theta) = sqrt(w) (U, 0)   (b is a constant),
+// b the detector's systematic offset in the world (its along-ray bias times
+// the horizontal viewing ray of the detection: a detector that places boxes
+// too far away has b along the ray; docs/detector_calibration.md, "Box
+// conventions"; 0 = none).
 // The term is what keeps a partly hidden or weakly textured car where the
 // detector saw it when its few visible points fit a shape in several places
 // (the visible top of a car behind another fits a shape with its cabin moved
@@ -22,17 +26,19 @@ namespace samp {
 
 class DetectionPositionCost : public ceres::SizedCostFunction<3, 4> {
  public:
-  // `covariance_in_world` must be symmetric positive definite.
+  // `covariance_in_world` must be symmetric positive definite; `bias_in_world` is b above.
   DetectionPositionCost(const Eigen::Vector3d& detected_position_in_world, const Eigen::Matrix3d& covariance_in_world,
-                        double weight)
+                        double weight, const Eigen::Vector3d& bias_in_world = Eigen::Vector3d::Zero())
       : detected_(detected_position_in_world) {
+    if (!bias_in_world.isZero(0.0)) detected_ -= bias_in_world;  // no bias: the same bits as without
     const Eigen::Matrix3d information = covariance_in_world.inverse();
     sqrt_information_ = std::sqrt(weight) * Eigen::Matrix3d(information.llt().matrixU());
   }
 
   static ceres::CostFunction* Create(const Eigen::Vector3d& detected_position_in_world,
-                                     const Eigen::Matrix3d& covariance_in_world, double weight) {
-    return new DetectionPositionCost(detected_position_in_world, covariance_in_world, weight);
+                                     const Eigen::Matrix3d& covariance_in_world, double weight,
+                                     const Eigen::Vector3d& bias_in_world = Eigen::Vector3d::Zero()) {
+    return new DetectionPositionCost(detected_position_in_world, covariance_in_world, weight, bias_in_world);
   }
 
   bool Evaluate(double const* const* parameters, double* residuals, double** jacobians) const override {

@@ -94,6 +94,24 @@ TEST(DetectionPositionCost, ResidualAndJacobian) {
   ASSERT_TRUE(cost.Evaluate(p_along, r_along, nullptr));
   ASSERT_TRUE(cost.Evaluate(p_across, r_across, nullptr));
   EXPECT_LT(Eigen::Map<Eigen::Vector3d>(r_along).norm(), 0.5 * Eigen::Map<Eigen::Vector3d>(r_across).norm());
+
+  // An along-ray bias b (the detector's boxes 0.4 m too far): the pose that
+  // costs nothing is the detection minus b along the ray; the Jacobian is the same.
+  const Eigen::Vector3d bias = 0.4 * ray_world;
+  DetectionPositionCost biased(detected, cov, 0.4, bias);
+  double at_truth[4] = {detected.x() - bias.x(), detected.y() - bias.y(), detected.z() - bias.z(), 0.3};
+  const double* p_truth[1] = {at_truth};
+  double rb[3];
+  ASSERT_TRUE(biased.Evaluate(p_truth, rb, nullptr));
+  EXPECT_LT(Eigen::Map<Eigen::Vector3d>(rb).norm(), 1e-9);
+  ASSERT_TRUE(biased.Evaluate(params, rb, nullptr));
+  const Eigen::Vector3d db = d + bias;
+  EXPECT_NEAR(Eigen::Map<Eigen::Vector3d>(rb).squaredNorm(), 0.4 * db.dot(cov.inverse() * db), 1e-9);
+  ExpectJacobiansMatch(biased, {pose}, 1e-7, "detection position with a bias");
+  DetectionPositionCost zero(detected, cov, 0.4, Eigen::Vector3d::Zero());
+  double r0[3];
+  ASSERT_TRUE(zero.Evaluate(params, r0, nullptr));
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(r0[i], res[i]);
 }
 
 TEST(ShapePriorCost, ResidualAndJacobian) {
@@ -123,6 +141,26 @@ TEST(DetectionSizeCost, ResidualAndJacobian) {
       std::sqrt(0.25) / 0.3 * (size0 + jacobian * (Eigen::Map<Eigen::Vector3d>(z) - z0) - detected);
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(r[i], expected[i], 1e-14);
   ExpectJacobiansMatch(cost, {z}, 1e-7, "detection size");
+
+  // A box convention b (detected - shape extent): residual = s(z) + b - s_det;
+  // the Jacobian does not change. b = 0 gives the same bits as no b.
+  const Eigen::Vector3d bias(0.05, -0.02, -0.3);
+  DetectionSizeCost biased(z0, size0, jacobian, detected, 0.3, 0.25, bias);
+  double rb[3];
+  ASSERT_TRUE(biased.Evaluate(params, rb, nullptr));
+  const Eigen::Vector3d expected_biased =
+      std::sqrt(0.25) / 0.3 * (size0 + jacobian * (Eigen::Map<Eigen::Vector3d>(z) - z0) + bias - detected);
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(rb[i], expected_biased[i], 1e-14);
+  ExpectJacobiansMatch(biased, {z}, 1e-7, "detection size with a bias");
+  // A shape whose extent is the detection minus b costs nothing.
+  const Eigen::VectorXd z_at0 = z0;
+  DetectionSizeCost exact(z0, detected - bias, jacobian, detected, 0.3, 1.0, bias);
+  const double* at0[1] = {z_at0.data()};
+  ASSERT_TRUE(exact.Evaluate(at0, rb, nullptr));
+  EXPECT_LT(Eigen::Map<Eigen::Vector3d>(rb).norm(), 1e-12);
+  DetectionSizeCost zero(z0, size0, jacobian, detected, 0.3, 0.25, Eigen::Vector3d::Zero());
+  ASSERT_TRUE(zero.Evaluate(params, rb, nullptr));
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(rb[i], r[i]);
 }
 
 TEST(ShapeLookup, LinearisedInsideBoxSizePredictsTheBox) {
