@@ -180,6 +180,9 @@ def run_one(args, index, data, work):
     # ru_maxrss of the child (kB) via /proc is gone after exit; wait4 gave it to Popen.
     rss_mb = getattr(proc, "rss_kb", 0) / 1024.0
     err = err.decode("utf-8", "replace")
+    # Warnings and per-sequence errors may come first; samp's verdict is the last line.
+    lines = err.strip().splitlines()
+    last_line = lines[-1] if lines else ""
     finding = None
     if timed_out:
         finding = "timeout"
@@ -189,9 +192,9 @@ def run_one(args, index, data, work):
         finding = f"exit {proc.returncode}"
     elif "Sanitizer" in err or "runtime error:" in err:
         finding = "sanitizer report"
-    elif proc.returncode == 1 and not err.startswith("samp: error: "):
-        finding = "error without samp's one-line message"
-    elif proc.returncode == 1 and err.startswith("samp: error: internal error"):
+    elif proc.returncode == 1 and not last_line.startswith("samp: error: "):
+        finding = "error without samp's one-line message (last line of stderr)"
+    elif proc.returncode == 1 and last_line.startswith("samp: error: internal error"):
         finding = "internal error (an exception other than samp::Error)"
     elif rss_mb > args.max_rss_mb:
         finding = f"peak RSS {rss_mb:.0f} MB"

@@ -110,6 +110,28 @@ class OptionsJson {
   void Nested(const std::string& key, S& options) {
     NestedWith(key, [&options](OptionsJson& io) { OptionFields(io, options); });
   }
+  // An array of objects at `key`, the fields of each listed by OptionFields(io, S&).
+  template <typename S>
+  void Array(const std::string& key, std::vector<S>& items) {
+    if (writing()) {
+      nlohmann::json array = nlohmann::json::array();
+      for (S& item : items) {
+        nlohmann::json child = nlohmann::json::object();
+        OptionsJson io(&child);
+        OptionFields(io, item);
+        array.push_back(std::move(child));
+      }
+      (*out_)[key] = std::move(array);
+    } else {
+      items.clear();
+      for (const JsonFields& child : in_->Objects(key)) {
+        S item;
+        OptionsJson io(&child);
+        OptionFields(io, item);
+        items.push_back(std::move(item));
+      }
+    }
+  }
   // The object at `key`, its fields listed by visit(OptionsJson&) (an OptionTable's Json).
   template <typename Visit>
   void NestedWith(const std::string& key, Visit visit) {

@@ -7,14 +7,11 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "libsamp/core/assignment.h"
 #include "libsamp/core/json_text.h"
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/pose.h"
-#include "libsamp/data/kitti_io.h"
-#include "libsamp/data/sequence_layout.h"
 
 namespace samp {
 namespace {
@@ -132,17 +129,10 @@ bool FitLinear(const std::vector<std::pair<double, double>>& distance_sigma, con
   return true;
 }
 
-// Turns residuals into the model's sigmas (and biases when `with_biases`).
-void Summarise(const std::vector<Residual>& residuals, const DetectorNoiseOptions& o, bool with_biases,
-               const TrackerOptions& defaults, DetectorNoiseModel* model) {
-  model->along_sigma_a = defaults.along_sigma_a, model->along_sigma_b = defaults.along_sigma_b;
-  model->across_sigma_a = defaults.across_sigma_a, model->across_sigma_b = defaults.across_sigma_b;
-  model->vertical_sigma_a = defaults.vertical_sigma_a, model->vertical_sigma_b = defaults.vertical_sigma_b;
-  for (double& s : model->size_sigma) s = defaults.size_sigma;
-  model->yaw_sigma_deg = defaults.yaw_sigma_deg;
-  model->biases_estimated = with_biases;
-
-  // Position, per distance bin.
+// The position sigmas (per distance bin, then a + b d over the bins) and,
+// when `with_biases`, the biases.
+void SummarisePosition(const std::vector<Residual>& residuals, const DetectorNoiseOptions& o, bool with_biases,
+                       DetectorNoiseModel* model) {
   std::vector<double> along_all;
   const size_t num_bins = o.bin_edges.size();
   std::vector<std::vector<double>> along(num_bins), across(num_bins), vertical(num_bins), distance(num_bins);
@@ -188,8 +178,11 @@ void Summarise(const std::vector<Residual>& residuals, const DetectorNoiseOption
     FitLinear(fit_vertical, fit_counts, &model->vertical_sigma_a, &model->vertical_sigma_b);
     if (with_biases) model->along_bias = Robust(along_all, o.trim_sigmas).center;
   }
+}
 
-  // Box dimensions.
+// The box size sigmas (and biases) per dimension.
+void SummariseSize(const std::vector<Residual>& residuals, const DetectorNoiseOptions& o, bool with_biases,
+                   DetectorNoiseModel* model) {
   std::vector<double> size[3];
   for (const Residual& r : residuals)
     if (r.has_size)
@@ -205,8 +198,10 @@ void Summarise(const std::vector<Residual>& residuals, const DetectorNoiseOption
       if (with_biases) model->size_bias[i] = e.center;
     }
   }
+}
 
-  // Yaw modulo 180 degrees.
+// The yaw sigma, modulo 180 degrees.
+void SummariseYaw(const std::vector<Residual>& residuals, const DetectorNoiseOptions& o, DetectorNoiseModel* model) {
   std::vector<double> yaw;
   for (const Residual& r : residuals)
     if (r.has_yaw) yaw.push_back(r.yaw);
@@ -217,6 +212,20 @@ void Summarise(const std::vector<Residual>& residuals, const DetectorNoiseOption
   } else {
     model->yaw_sigma_deg = std::max(Robust(yaw, o.trim_sigmas).sigma * 180.0 / kPi, 0.01);
   }
+}
+
+// Turns residuals into the model's sigmas (and biases when `with_biases`).
+void Summarise(const std::vector<Residual>& residuals, const DetectorNoiseOptions& o, bool with_biases,
+               const TrackerOptions& defaults, DetectorNoiseModel* model) {
+  model->along_sigma_a = defaults.along_sigma_a, model->along_sigma_b = defaults.along_sigma_b;
+  model->across_sigma_a = defaults.across_sigma_a, model->across_sigma_b = defaults.across_sigma_b;
+  model->vertical_sigma_a = defaults.vertical_sigma_a, model->vertical_sigma_b = defaults.vertical_sigma_b;
+  for (double& s : model->size_sigma) s = defaults.size_sigma;
+  model->yaw_sigma_deg = defaults.yaw_sigma_deg;
+  model->biases_estimated = with_biases;
+  SummarisePosition(residuals, o, with_biases, model);
+  SummariseSize(residuals, o, with_biases, model);
+  SummariseYaw(residuals, o, model);
 }
 
 // Least-squares polynomial (degree q - 1) in time of the bottom centre in the
@@ -261,6 +270,98 @@ std::vector<Eigen::Vector3d> SmoothTrack(const std::vector<Eigen::Vector3d>& poi
     }
   }
   return fitted;
+}
+
+// The axis (modulo 180 degrees) of a track's box headings: the mean of the
+// doubled angles, then the median difference. Returns its direction: of the
+// motion when the smoothed track moves faster than 2 m/s, else of most boxes.
+double TrackDirection(const std::vector<double>& headings, const std::vector<Eigen::Vector3d>& fitted,
+                      const std::vector<double>& times, double* track_axis) {
+  double c = 0, s = 0;
+  for (double h : headings) c += std::cos(2 * h), s += std::sin(2 * h);
+  double axis = 0.5 * std::atan2(s, c);
+  std::vector<double> axis_differences;
+  for (double h : headings) axis_differences.push_back(AxisDifference(h, axis));
+  axis += Median(axis_differences);
+  // Its direction: of the motion when the car moves, else of most boxes.
+  const Eigen::Vector3d motion = fitted.back() - fitted.front();
+  const double duration = times.back() - times.front();
+  double direction = axis;
+  const Eigen::Vector2d horizontal(motion.x(), motion.z());
+  if (duration > 0 && horizontal.norm() / duration > 2.0) {
+    const double motion_heading = std::atan2(horizontal.y(), horizontal.x());
+    direction = std::cos(motion_heading - axis) >= 0 ? axis : axis + kPi;
+  } else {
+    int forward = 0;
+    for (double h : headings) forward += std::cos(h - axis) >= 0 ? 1 : -1;
+    direction = forward >= 0 ? axis : axis + kPi;
+  }
+  *track_axis = axis;
+  return direction;
+}
+
+// Flips, directed detections and the frames spanned and missed by the confident tracks.
+struct TrackCounts {
+  long long flips = 0, directed = 0, spanned = 0, missed = 0;
+};
+
+// The residuals of one confident track's detections against its smoothed
+// trajectory, its median box and its axis (scaled for the parameters the
+// smoother and the medians take); counts its flips and interior misses.
+void AddTrackResiduals(const LinkedTrack& track, const std::map<int, const FrameDetections*>& frame_of,
+                       const DetectorNoiseOptions& o, const TrackerOptions& defaults,
+                       std::vector<Residual>* residuals, TrackCounts* counts) {
+  const int n = static_cast<int>(track.detections.size());
+  std::vector<Eigen::Vector3d> points(n);
+  std::vector<Eigen::Matrix3d> information(n), rotation(n);
+  std::vector<double> times(n), headings(n);
+  for (int i = 0; i < n; ++i) {
+    const ObjectLabel& d = track.detections[i];
+    const auto it = frame_of.find(d.frame);
+    SAMP_CHECK(it != frame_of.end()) << "EstimateDetectorNoise: a track's detection is in frame " << d.frame
+                                     << ", which the sequence does not list";
+    const Eigen::Isometry3d& pose = it->second->world_from_camera;
+    rotation[i] = pose.linear();
+    points[i] = pose * d.position;
+    information[i] = (rotation[i] * DetectionCovariance(d.position, defaults) * rotation[i].transpose()).inverse();
+    times[i] = d.frame / defaults.frame_rate_hz;
+    headings[i] = WorldHeading(d, rotation[i]);
+  }
+  // Interior misses: frames of the sequence within the track's span without its detection.
+  const auto first = frame_of.find(track.detections.front().frame);
+  const auto last = frame_of.find(track.detections.back().frame);
+  const long long span = std::distance(first, last) + 1;
+  counts->spanned += span;
+  counts->missed += span - n;
+
+  const int q = (o.smoother_degree == 2 && n >= 9) ? 3 : 2;
+  const std::vector<Eigen::Vector3d> fitted = SmoothTrack(points, information, times, q);
+  // Residuals of a fit with q parameters per coordinate shrink by (n - q) / n on average.
+  const double position_scale = std::sqrt(double(n) / (n - q));
+  const double one_scale = std::sqrt(double(n) / (n - 1));
+  double median_size[3];
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> v;
+    for (const ObjectLabel& d : track.detections) v.push_back(k == 0 ? d.height : k == 1 ? d.width : d.length);
+    median_size[k] = Median(v);
+  }
+  double axis = 0.0;
+  const double direction = TrackDirection(headings, fitted, times, &axis);
+  for (int i = 0; i < n; ++i) {
+    const ObjectLabel& d = track.detections[i];
+    Residual r;
+    const Eigen::Vector3d error_in_camera = rotation[i].transpose() * (points[i] - fitted[i]) * position_scale;
+    Decompose(d.position, error_in_camera, &r);
+    r.size[0] = (d.height - median_size[0]) * one_scale;
+    r.size[1] = (d.width - median_size[1]) * one_scale;
+    r.size[2] = (d.length - median_size[2]) * one_scale;
+    r.has_size = true;
+    r.yaw = AxisDifference(headings[i], axis) * one_scale;
+    r.has_yaw = true;
+    residuals->push_back(r);
+    counts->flips += std::cos(headings[i] - direction) < 0;
+    ++counts->directed;
+  }
 }
 
 void CheckModel(const DetectorNoiseModel& m, const std::string& where) {
@@ -326,51 +427,71 @@ std::string DetectorNoiseModel::BriefReport() const {
   return s.str();
 }
 
+// The keys of a detector model file, listed once for ToJson and
+// DetectorNoiseModelFromJson; "format", "version" and the optional
+// "box_convention" object are written beside them.
+static void OptionFields(OptionsJson& io, DistanceBin& b) {
+  io("min_distance", b.min_distance);
+  io("max_distance", b.max_distance);
+  io("count", b.count);
+  io("along_sigma", b.along_sigma);
+  io("across_sigma", b.across_sigma);
+  io("vertical_sigma", b.vertical_sigma);
+  io("along_bias", b.along_bias);
+  io("across_bias", b.across_bias);
+  io("vertical_bias", b.vertical_bias);
+}
+
+static void OptionFields(OptionsJson& io, DetectorNoiseModel& m) {
+  io("source", m.source);
+  io("along_sigma_a", m.along_sigma_a);
+  io("along_sigma_b", m.along_sigma_b);
+  io("across_sigma_a", m.across_sigma_a);
+  io("across_sigma_b", m.across_sigma_b);
+  io("vertical_sigma_a", m.vertical_sigma_a);
+  io("vertical_sigma_b", m.vertical_sigma_b);
+  io("along_bias", m.along_bias);
+  io.NestedWith("size", [&m](OptionsJson& size) {
+    for (int i = 0; i < 3; ++i)
+      size.NestedWith(kDimensionNames[i], [&m, i](OptionsJson& d) {
+        d("sigma", m.size_sigma[i]);
+        d("bias", m.size_bias[i]);
+      });
+  });
+  io("yaw_sigma_deg", m.yaw_sigma_deg);
+  io("flip_rate", m.flip_rate);
+  io("miss_rate", m.miss_rate);
+  io("false_positives_per_frame", m.false_positives_per_frame);
+  io("biases_estimated", m.biases_estimated);
+  io.NestedWith("samples", [&m](OptionsJson& samples) {
+    samples("position", m.num_position_samples);
+    samples("size", m.num_size_samples);
+    samples("yaw", m.num_yaw_samples);
+    samples("tracks", m.num_tracks);
+    samples("frames", m.num_frames);
+  });
+  io.Array("distance_bins", m.bins);
+  io("notes", m.notes);
+}
+
+// The box convention (detected minus shape extent), present only when estimated.
+static void BoxConventionFields(OptionsJson& io, DetectorNoiseModel& m) {
+  io("cars", m.box_convention_tracks);
+  io("detections", m.box_convention_detections);
+  io.NestedWith("size_bias_error", [&m](OptionsJson& errors) {
+    for (int i = 0; i < 3; ++i) errors(kDimensionNames[i], m.size_bias_error[i]);
+  });
+  io("along_bias_error", m.along_bias_error);
+}
+
 std::string DetectorNoiseModel::ToJson() const {
-  nlohmann::json bins_json = nlohmann::json::array();
-  for (const DistanceBin& b : bins)
-    bins_json.push_back({{"min_distance", b.min_distance},
-                         {"max_distance", b.max_distance},
-                         {"count", b.count},
-                         {"along_sigma", b.along_sigma},
-                         {"across_sigma", b.across_sigma},
-                         {"vertical_sigma", b.vertical_sigma},
-                         {"along_bias", b.along_bias},
-                         {"across_bias", b.across_bias},
-                         {"vertical_bias", b.vertical_bias}});
-  nlohmann::json size = nlohmann::json::object();
-  for (int i = 0; i < 3; ++i) size[kDimensionNames[i]] = {{"sigma", size_sigma[i]}, {"bias", size_bias[i]}};
-  nlohmann::json j = {{"format", kFormat},
-                            {"version", kVersion},
-                            {"source", source},
-                            {"along_sigma_a", along_sigma_a},
-                            {"along_sigma_b", along_sigma_b},
-                            {"across_sigma_a", across_sigma_a},
-                            {"across_sigma_b", across_sigma_b},
-                            {"vertical_sigma_a", vertical_sigma_a},
-                            {"vertical_sigma_b", vertical_sigma_b},
-                            {"along_bias", along_bias},
-                            {"size", size},
-                            {"yaw_sigma_deg", yaw_sigma_deg},
-                            {"flip_rate", flip_rate},
-                            {"miss_rate", miss_rate},
-                            {"false_positives_per_frame", false_positives_per_frame},
-                            {"biases_estimated", biases_estimated},
-                            {"samples",
-                             {{"position", num_position_samples},
-                              {"size", num_size_samples},
-                              {"yaw", num_yaw_samples},
-                              {"tracks", num_tracks},
-                              {"frames", num_frames}}},
-                            {"distance_bins", bins_json},
-                            {"notes", notes}};
+  DetectorNoiseModel& m = const_cast<DetectorNoiseModel&>(*this);  // the writer only reads the fields
+  nlohmann::json j = OptionsToJson(m);
+  j["format"] = kFormat;
+  j["version"] = kVersion;
   if (box_convention_estimated) {
-    nlohmann::json errors = nlohmann::json::object();
-    for (int i = 0; i < 3; ++i) errors[kDimensionNames[i]] = size_bias_error[i];
-    j["box_convention"] = {{"cars", box_convention_tracks},
-                           {"detections", box_convention_detections},
-                           {"size_bias_error", errors},
-                           {"along_bias_error", along_bias_error}};
+    OptionsJson io(&j);
+    io.NestedWith("box_convention", [&m](OptionsJson& box) { BoxConventionFields(box, m); });
   }
   return DumpJson(j, 2);
 }
@@ -385,55 +506,14 @@ DetectorNoiseModel DetectorNoiseModelFromJson(const std::string& text, const std
       << source << ": detector model version " << version << " is not supported (this samp reads version "
       << DetectorNoiseModel::kVersion << ")";
   DetectorNoiseModel m;
-  f.Read("source", &m.source);
-  f.Read("along_sigma_a", &m.along_sigma_a);
-  f.Read("along_sigma_b", &m.along_sigma_b);
-  f.Read("across_sigma_a", &m.across_sigma_a);
-  f.Read("across_sigma_b", &m.across_sigma_b);
-  f.Read("vertical_sigma_a", &m.vertical_sigma_a);
-  f.Read("vertical_sigma_b", &m.vertical_sigma_b);
-  f.Read("along_bias", &m.along_bias);
-  const JsonFields size = f.Object("size");
-  for (int i = 0; i < 3; ++i) {
-    const JsonFields d = size.Object(kDimensionNames[i]);
-    d.Read("sigma", &m.size_sigma[i]);
-    d.Read("bias", &m.size_bias[i]);
-  }
-  f.Read("yaw_sigma_deg", &m.yaw_sigma_deg);
-  f.Read("flip_rate", &m.flip_rate);
-  f.Read("miss_rate", &m.miss_rate);
-  f.Read("false_positives_per_frame", &m.false_positives_per_frame);
-  f.Read("biases_estimated", &m.biases_estimated);
-  const JsonFields samples = f.Object("samples");
-  samples.Read("position", &m.num_position_samples);
-  samples.Read("size", &m.num_size_samples);
-  samples.Read("yaw", &m.num_yaw_samples);
-  samples.Read("tracks", &m.num_tracks);
-  samples.Read("frames", &m.num_frames);
-  for (const JsonFields& b : f.Objects("distance_bins")) {
-    DistanceBin bin;
-    b.Read("min_distance", &bin.min_distance);
-    b.Read("max_distance", &bin.max_distance);
-    b.Read("count", &bin.count);
-    b.Read("along_sigma", &bin.along_sigma);
-    b.Read("across_sigma", &bin.across_sigma);
-    b.Read("vertical_sigma", &bin.vertical_sigma);
-    b.Read("along_bias", &bin.along_bias);
-    b.Read("across_bias", &bin.across_bias);
-    b.Read("vertical_bias", &bin.vertical_bias);
-    SAMP_CHECK(bin.count >= 0 && bin.max_distance >= bin.min_distance)
-        << b.Where() << ": a distance bin needs count >= 0 and max_distance >= min_distance";
-    m.bins.push_back(bin);
-  }
-  f.Read("notes", &m.notes);
+  OptionsFromJson(f, &m);
+  for (size_t k = 0; k < m.bins.size(); ++k)
+    SAMP_CHECK(m.bins[k].count >= 0 && m.bins[k].max_distance >= m.bins[k].min_distance)
+        << source << ": distance_bins[" << k << "]: a distance bin needs count >= 0 and max_distance >= min_distance";
   if (f.Has("box_convention")) {
-    const JsonFields box = f.Object("box_convention");
+    OptionsJson io(&f);
+    io.NestedWith("box_convention", [&m](OptionsJson& box) { BoxConventionFields(box, m); });
     m.box_convention_estimated = true;
-    box.Read("cars", &m.box_convention_tracks);
-    box.Read("detections", &m.box_convention_detections);
-    const JsonFields errors = box.Object("size_bias_error");
-    for (int i = 0; i < 3; ++i) errors.Read(kDimensionNames[i], &m.size_bias_error[i]);
-    box.Read("along_bias_error", &m.along_bias_error);
     SAMP_CHECK(m.box_convention_tracks >= 0 && m.box_convention_detections >= 0)
         << source << ": 'box_convention' counts must be >= 0";
     for (int i = 0; i < 3; ++i)
@@ -473,7 +553,7 @@ DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequ
   DetectorNoiseModel model;
   model.source = "self-calibration";
   std::vector<Residual> residuals;
-  long long flips = 0, directed = 0, spanned = 0, missed = 0;
+  TrackCounts counts;
   long long in_confident = 0, all_detections = 0;
   for (const LinkedSequence& seq : sequences) {
     std::map<int, const FrameDetections*> frame_of;
@@ -485,79 +565,12 @@ DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequ
       if (n < o.min_track_detections) continue;
       ++model.num_tracks;
       in_confident += n;
-      std::vector<Eigen::Vector3d> points(n);
-      std::vector<Eigen::Matrix3d> information(n), rotation(n);
-      std::vector<double> times(n), headings(n);
-      for (int i = 0; i < n; ++i) {
-        const ObjectLabel& d = track.detections[i];
-        const auto it = frame_of.find(d.frame);
-        SAMP_CHECK(it != frame_of.end()) << "EstimateDetectorNoise: a track's detection is in frame " << d.frame
-                                         << ", which the sequence does not list";
-        const Eigen::Isometry3d& pose = it->second->world_from_camera;
-        rotation[i] = pose.linear();
-        points[i] = pose * d.position;
-        information[i] = (rotation[i] * DetectionCovariance(d.position, defaults) * rotation[i].transpose()).inverse();
-        times[i] = d.frame / defaults.frame_rate_hz;
-        headings[i] = WorldHeading(d, rotation[i]);
-      }
-      // Interior misses: frames of the sequence within the track's span without its detection.
-      const auto first = frame_of.find(track.detections.front().frame);
-      const auto last = frame_of.find(track.detections.back().frame);
-      const long long span = std::distance(first, last) + 1;
-      spanned += span;
-      missed += span - n;
-
-      const int q = (o.smoother_degree == 2 && n >= 9) ? 3 : 2;
-      const std::vector<Eigen::Vector3d> fitted = SmoothTrack(points, information, times, q);
-      // Residuals of a fit with q parameters per coordinate shrink by (n - q) / n on average.
-      const double position_scale = std::sqrt(double(n) / (n - q));
-      const double one_scale = std::sqrt(double(n) / (n - 1));
-      double median_size[3];
-      for (int k = 0; k < 3; ++k) {
-        std::vector<double> v;
-        for (const ObjectLabel& d : track.detections) v.push_back(k == 0 ? d.height : k == 1 ? d.width : d.length);
-        median_size[k] = Median(v);
-      }
-      // The track's axis: the mean of the doubled angles, then the median difference.
-      double c = 0, s = 0;
-      for (double h : headings) c += std::cos(2 * h), s += std::sin(2 * h);
-      double axis = 0.5 * std::atan2(s, c);
-      std::vector<double> axis_differences;
-      for (double h : headings) axis_differences.push_back(AxisDifference(h, axis));
-      axis += Median(axis_differences);
-      // Its direction: of the motion when the car moves, else of most boxes.
-      const Eigen::Vector3d motion = fitted.back() - fitted.front();
-      const double duration = times.back() - times.front();
-      double direction = axis;
-      const Eigen::Vector2d horizontal(motion.x(), motion.z());
-      if (duration > 0 && horizontal.norm() / duration > 2.0) {
-        const double motion_heading = std::atan2(horizontal.y(), horizontal.x());
-        direction = std::cos(motion_heading - axis) >= 0 ? axis : axis + kPi;
-      } else {
-        int forward = 0;
-        for (double h : headings) forward += std::cos(h - axis) >= 0 ? 1 : -1;
-        direction = forward >= 0 ? axis : axis + kPi;
-      }
-      for (int i = 0; i < n; ++i) {
-        const ObjectLabel& d = track.detections[i];
-        Residual r;
-        const Eigen::Vector3d error_in_camera = rotation[i].transpose() * (points[i] - fitted[i]) * position_scale;
-        Decompose(d.position, error_in_camera, &r);
-        r.size[0] = (d.height - median_size[0]) * one_scale;
-        r.size[1] = (d.width - median_size[1]) * one_scale;
-        r.size[2] = (d.length - median_size[2]) * one_scale;
-        r.has_size = true;
-        r.yaw = AxisDifference(headings[i], axis) * one_scale;
-        r.has_yaw = true;
-        residuals.push_back(r);
-        flips += std::cos(headings[i] - direction) < 0;
-        ++directed;
-      }
+      AddTrackResiduals(track, frame_of, o, defaults, &residuals, &counts);
     }
   }
   Summarise(residuals, o, /*with_biases=*/false, defaults, &model);
-  model.flip_rate = directed > 0 ? double(flips) / directed : 0.0;
-  model.miss_rate = spanned > 0 ? double(missed) / spanned : 0.0;
+  model.flip_rate = counts.directed > 0 ? double(counts.flips) / counts.directed : 0.0;
+  model.miss_rate = counts.spanned > 0 ? double(counts.missed) / counts.spanned : 0.0;
   model.false_positives_per_frame =
       model.num_frames > 0 ? double(std::max(0LL, all_detections - in_confident)) / model.num_frames : 0.0;
   model.source = model.num_position_samples >= o.min_samples ? "self-calibration" : "defaults";
@@ -677,179 +690,6 @@ DetectorNoiseModel EstimateDetectorNoiseFromTruth(const std::vector<MatchedDetec
   model.miss_rate = truths > 0 ? num_missed / truths : 0.0;
   model.false_positives_per_frame = num_frames > 0 ? double(num_false_positives) / num_frames : 0.0;
   return model;
-}
-
-void CalibrationOptions::Check() const {
-  noise.Check();
-  SAMP_CHECK(max_iterations >= 1) << "CalibrationOptions.max_iterations must be >= 1";
-  SAMP_CHECK(tolerance > 0) << "CalibrationOptions.tolerance must be > 0";
-  SAMP_CHECK(tracker_sigma_scale >= 1.0) << "CalibrationOptions.tracker_sigma_scale must be >= 1";
-  box.Check();
-}
-
-std::string CalibrationResult::BriefReport() const {
-  std::ostringstream s;
-  s << "detector self-calibration: " << iterations << " iteration(s), "
-    << (converged ? "converged" : "not converged") << "; " << model.BriefReport();
-  return s.str();
-}
-
-TrackerOptions TrackerForModel(const TrackerOptions& initial, const DetectorNoiseModel& model, double k) {
-  SAMP_CHECK(k > 0) << "TrackerForModel: sigma_scale must be > 0";
-  TrackerOptions next = initial;
-  model.ApplyTo(&next);
-  next.along_sigma_a *= k, next.along_sigma_b *= k, next.across_sigma_a *= k, next.across_sigma_b *= k;
-  next.vertical_sigma_a *= k, next.vertical_sigma_b *= k, next.size_sigma *= k, next.yaw_sigma_deg *= k;
-  next.robust_cues = true;
-  next.Check();
-  return next;
-}
-
-CalibrationResult CalibrateTracker(const std::vector<std::vector<FrameDetections>>& frames_of_sequence,
-                                   const TrackerOptions& initial, const CalibrationOptions& options) {
-  options.Check();
-  initial.Check();
-  CalibrationResult result;
-  result.tracker = initial;
-  result.tracker.robust_cues = true;
-  DetectorNoiseModel previous;
-  bool have_previous = false;
-  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
-    std::vector<LinkedSequence> linked(frames_of_sequence.size());
-    for (size_t s = 0; s < frames_of_sequence.size(); ++s) {
-      linked[s].frames = frames_of_sequence[s];
-      for (const FrameDetections& f : linked[s].frames) linked[s].num_detections += int(f.detections.size());
-      if (linked[s].frames.empty()) continue;
-      linked[s].tracks = LinkDetections(linked[s].frames, result.tracker, nullptr);
-    }
-    // The residuals are weighted by the current model (the tracker's, without its safety scale).
-    TrackerOptions weighting = initial;
-    if (have_previous) previous.ApplyTo(&weighting);
-    DetectorNoiseModel model = EstimateDetectorNoise(linked, options.noise, weighting);
-    // Terms with too few samples keep the user's values, not the previous iteration's.
-    if (model.num_position_samples < options.noise.min_samples) {
-      model.along_sigma_a = initial.along_sigma_a, model.along_sigma_b = initial.along_sigma_b;
-      model.across_sigma_a = initial.across_sigma_a, model.across_sigma_b = initial.across_sigma_b;
-      model.vertical_sigma_a = initial.vertical_sigma_a, model.vertical_sigma_b = initial.vertical_sigma_b;
-    }
-    if (model.num_size_samples < options.noise.min_samples)
-      for (double& s : model.size_sigma) s = initial.size_sigma;
-    if (model.num_yaw_samples < options.noise.min_samples) model.yaw_sigma_deg = initial.yaw_sigma_deg;
-    result.iterations = iteration;
-    result.history.push_back(model.BriefReport());
-    double change = have_previous ? 0.0 : 1e9;
-    if (have_previous) {
-      auto relative = [](double a, double b) { return std::abs(a - b) / std::max(std::abs(b), 1e-3); };
-      // Sigma at 10 and 40 m for the position terms.
-      for (double d : {10.0, 40.0}) {
-        change = std::max(change, relative(model.along_sigma_a + model.along_sigma_b * d,
-                                           previous.along_sigma_a + previous.along_sigma_b * d));
-        change = std::max(change, relative(model.across_sigma_a + model.across_sigma_b * d,
-                                           previous.across_sigma_a + previous.across_sigma_b * d));
-        change = std::max(change, relative(model.vertical_sigma_a + model.vertical_sigma_b * d,
-                                           previous.vertical_sigma_a + previous.vertical_sigma_b * d));
-      }
-      for (int i = 0; i < 3; ++i) change = std::max(change, relative(model.size_sigma[i], previous.size_sigma[i]));
-      change = std::max(change, relative(model.yaw_sigma_deg, previous.yaw_sigma_deg));
-    }
-    previous = model;
-    have_previous = true;
-    result.tracker = TrackerForModel(initial, model, options.tracker_sigma_scale);
-    result.model = model;
-    if (change < options.tolerance) {
-      result.converged = true;
-      break;
-    }
-  }
-  return result;
-}
-
-void DetectorCalibrationOptions::Check() const {
-  SAMP_CHECK(!sequences.empty()) << "DetectorCalibrationOptions.sequences is empty (give at least one --seq)";
-  SAMP_CHECK(truth_labels.empty() || truth_labels.size() == sequences.size())
-      << "DetectorCalibrationOptions.truth_labels: " << truth_labels.size() << " files for " << sequences.size()
-      << " sequences (give none or one per sequence)";
-  SAMP_CHECK(match_distance > 0) << "DetectorCalibrationOptions.match_distance must be > 0";
-  sequence.Check();
-  noise.Check();
-  defaults.Check();
-}
-
-std::string DetectorCalibrationSummary::BriefReport() const {
-  std::ostringstream s;
-  s << num_frames << " frames: " << num_detections << " detections, " << num_truths << " true boxes, "
-    << num_matched << " matched";
-  return s.str();
-}
-
-DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& options,
-                                              DetectorCalibrationSummary* summary) {
-  options.Check();
-  DetectorCalibrationSummary local;
-  DetectorCalibrationSummary& result = summary != nullptr ? *summary : local;
-  result = DetectorCalibrationSummary();
-  std::vector<MatchedDetection> matches;
-  int num_missed = 0, num_false_positives = 0;
-  for (size_t s = 0; s < options.sequences.size(); ++s) {
-    const SequenceReader reader(options.sequences[s], options.sequence);
-    const SequenceFiles& files = reader.files();
-    const std::string labels_path = options.truth_labels.empty()
-                                        ? SequenceLayout(files.directory, files.name).GroundTruthLabels()
-                                        : options.truth_labels[s];
-    std::map<int, std::vector<ObjectLabel>> truth_of_frame;
-    std::map<int, int> index_of_frame;
-    for (int i = 0; i < reader.num_frames(); ++i) index_of_frame[files.frames[i].frame] = i;
-    auto in_range = [&](int frame) {
-      return (options.sequence.first_frame < 0 || frame >= options.sequence.first_frame) &&
-             (options.sequence.last_frame < 0 || frame <= options.sequence.last_frame);
-    };
-    for (const ObjectLabel& label : ReadTrackingLabels(labels_path)) {
-      if (SameObjectType(label.type, "DontCare")) continue;
-      bool kept = false;
-      for (const std::string& type : options.sequence.object_types) kept = kept || SameObjectType(label.type, type);
-      if (!kept || !in_range(label.frame)) continue;
-      SAMP_CHECK(index_of_frame.count(label.frame) > 0)
-          << labels_path << ": a label in frame " << label.frame << ", which sequence " << options.sequences[s]
-          << " does not have (mismatched label file?)";
-      truth_of_frame[label.frame].push_back(label);
-    }
-    for (const auto& [frame, index] : index_of_frame) {
-      if (!in_range(frame)) continue;
-      ++result.num_frames;
-      const std::vector<ObjectLabel> detections = reader.ReadDetections(index);
-      const std::vector<ObjectLabel>& truths = truth_of_frame[frame];
-      result.num_detections += int(detections.size());
-      result.num_truths += int(truths.size());
-      const int rows = int(detections.size()), cols = int(truths.size());
-      std::vector<double> cost(size_t(rows) * cols, kNoAssignment);
-      for (int r = 0; r < rows; ++r)
-        for (int c = 0; c < cols; ++c) {
-          const Eigen::Vector3d d = detections[r].position - truths[c].position;
-          const double horizontal = std::hypot(d.x(), d.z());
-          if (horizontal <= options.match_distance) cost[size_t(r) * cols + c] = horizontal;
-        }
-      const std::vector<int> assignment = SolveAssignment(cost, rows, cols);
-      int matched = 0;
-      for (int r = 0; r < rows; ++r) {
-        if (assignment[r] < 0) continue;
-        MatchedDetection m;
-        m.detection = detections[r];
-        m.truth = truths[assignment[r]];
-        m.truth_id = int(s) * 1000000 + m.truth.track_id;
-        matches.push_back(m);
-        ++matched;
-      }
-      num_false_positives += rows - matched;
-      num_missed += cols - matched;
-    }
-  }
-  result.num_matched = int(matches.size());
-  SAMP_CHECK(result.num_matched >= options.noise.min_samples)
-      << "calibrate-detector: only " << result.num_matched << " detection(s) match a true box within "
-      << options.match_distance << " m (" << result.BriefReport() << "); at least " << options.noise.min_samples
-      << " are needed: give more sequences, or check that the labels belong to the sequences";
-  return EstimateDetectorNoiseFromTruth(matches, num_missed, num_false_positives, result.num_frames, options.noise,
-                                        options.defaults);
 }
 
 }  // namespace samp
