@@ -18,9 +18,11 @@
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/data/kitti_text.h"
 
 namespace samp {
-namespace {
+// The text helpers are shared with the other KITTI readers (data/kitti_text.h).
+namespace kitti_text {
 
 // A text file read into lines, for parsers that report "path:line: problem".
 struct TextFile {
@@ -225,7 +227,9 @@ std::string FormatMatrixRow(const Eigen::Matrix<double, 3, 4>& m) {
   return s.str();
 }
 
-}  // namespace
+}  // namespace kitti_text
+
+using namespace kitti_text;
 
 bool SameObjectType(const std::string& a, const std::string& b) {
   return a.size() == b.size() &&
