@@ -297,7 +297,7 @@ void WriteOxts(const std::string& path, const std::vector<OxtsRecord>& records) 
     double v[30] = {r.lat_deg, r.lon_deg, r.alt, r.roll, r.pitch, r.yaw};
     std::copy(r.rest.begin(), r.rest.end(), v + 6);
     for (const double x : v) SAMP_CHECK(std::isfinite(x)) << "WriteOxts " << path << ": a non-finite value";
-    text += FormatNumbers(v, 30, 15) + "\n";
+    text += FormatNumbers(v, 30, 17) + "\n";
   }
   WriteTextFileAtomically(path, text);
 }
