@@ -54,7 +54,7 @@ Eigen::Matrix3d CheckedRotation(const Eigen::Matrix3d& m, const std::string& pat
 std::string FormatNumbers(const double* values, int count, int digits) {
   std::ostringstream s;
   s << std::setprecision(digits);
-  for (int i = 0; i < count; ++i) s << (i > 0 ? " " : "") << values[i];
+  for (int i = 0; i < count; ++i) s << (i > 0 ? " " : "") << (values[i] == 0.0 ? 0.0 : values[i]);  // no "-0"
   return s.str();
 }
 
