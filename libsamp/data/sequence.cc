@@ -106,11 +106,78 @@ SequenceFiles ListKittiTrackingSequence(const std::string& directory, const Kitt
   return files;
 }
 
+// A sequence of KITTI stereo 2015's layout, named by its calibration file
+// ROOT/calib_cam_to_cam/<seq>.txt.
+SequenceFiles ListKittiStereoSequence(const std::string& calibration) {
+  const fs::path root = fs::path(calibration).parent_path().parent_path();
+  SequenceFiles files;
+  files.layout = SequenceFiles::Layout::kKittiStereo;
+  files.directory = calibration;
+  files.name = fs::path(calibration).stem().string();
+  files.calibration = calibration;
+  const auto left = ListFrameFiles(root / SequenceLayout::kLeftImageFolder, files.name, ".png");
+  const auto right = ListFrameFiles(root / SequenceLayout::kRightImageFolder, files.name, ".png");
+  SAMP_CHECK(!left.empty()) << "KITTI stereo sequence " << calibration << ": no "
+                            << (root / SequenceLayout::kLeftImageFolder / (files.name + "_<ff>.png")).string()
+                            << " images";
+  for (const auto& [frame, path] : left) {
+    FrameFiles f;
+    f.frame = frame;
+    f.image_left = path;
+    const auto it = right.find(frame);
+    if (it != right.end()) f.image_right = it->second;
+    files.frames.push_back(f);
+  }
+  return files;
+}
+
+bool IsKittiStereoCalibration(const std::string& path) {
+  std::error_code error;
+  return fs::is_regular_file(path, error) && fs::path(path).parent_path().filename() == "calib_cam_to_cam";
+}
+
 }  // namespace
+
+std::vector<std::string> KittiStereoSequences(const std::string& root, const std::string& sequences) {
+  std::error_code error;
+  const fs::path calib = fs::path(root) / "calib_cam_to_cam";
+  SAMP_CHECK(fs::is_directory(calib, error))
+      << "KITTI stereo root " << root << " has no calib_cam_to_cam/ folder (P_rect_02, P_rect_03 per sequence)";
+  std::vector<std::string> names;
+  if (sequences == "all") {
+    for (const fs::directory_entry& entry : fs::directory_iterator(calib)) {
+      if (!entry.is_regular_file() || entry.path().extension() != ".txt") continue;
+      const std::string name = entry.path().stem().string();
+      if (!ListFrameFiles(fs::path(root) / SequenceLayout::kLeftImageFolder, name, ".png").empty()) names.push_back(name);
+    }
+    std::sort(names.begin(), names.end());
+    SAMP_CHECK(!names.empty()) << root << ": no sequence has both calib_cam_to_cam/<seq>.txt and image_2/<seq>_<ff>.png";
+  } else {
+    std::stringstream list(sequences);
+    for (std::string name; std::getline(list, name, ',');) {
+      name.erase(0, name.find_first_not_of(" \t"));
+      name.erase(name.find_last_not_of(" \t") + 1);
+      SAMP_CHECK(!name.empty()) << "--sequence '" << sequences << "': empty sequence name";
+      if (name.size() < 6 && name.find_first_not_of("0123456789") == std::string::npos)
+        name = std::string(6 - name.size(), '0') + name;
+      SAMP_CHECK(std::find(names.begin(), names.end(), name) == names.end()) << "--sequence lists " << name << " twice";
+      names.push_back(name);
+    }
+  }
+  std::vector<std::string> files;
+  for (const std::string& name : names) {
+    const fs::path file = calib / (name + ".txt");
+    SAMP_CHECK(fs::is_regular_file(file, error)) << "KITTI stereo root " << root << " has no sequence " << name
+                                                  << " (no " << file.string() << ")";
+    files.push_back(file.string());
+  }
+  return files;
+}
 
 SequenceFiles ListSequence(const std::string& directory) {
   KittiTrackingLayout kitti("", "");
   if (KittiTrackingLayout::FromSequenceFolder(directory, &kitti)) return ListKittiTrackingSequence(directory, kitti);
+  if (IsKittiStereoCalibration(directory)) return ListKittiStereoSequence(directory);
   const fs::path root(directory);
   std::error_code error;
   SAMP_CHECK(fs::is_directory(root, error)) << "sequence directory " << directory << " does not exist";
@@ -201,13 +268,16 @@ SequenceReader::SequenceReader(const std::string& directory, const SequenceOptio
         << files_.oxts << ":" << records.size() + 1 << ": no GPS/IMU record for frame " << records.size()
         << " (the file has " << records.size() << " lines, the sequence has frames up to " << last << ")";
     poses_ = CameraPosesFromOxts(records, kitti);
+  } else if (files_.layout == SequenceFiles::Layout::kKittiStereo) {
+    camera_from_label_frame_ = ReadCamera2Offset(files_.calibration);
+    LogInfo() << files_.name << ": KITTI stereo 2015 has no ego poses, assuming a static camera";
   } else if (!files_.poses.empty()) {
     poses_ = ReadPoses(files_.poses);
     const int last = files_.frames.back().frame;
     SAMP_CHECK(static_cast<int>(poses_.size()) > last)
         << files_.poses << ": " << poses_.size() << " poses (frames 0.." << poses_.size() - 1
         << "), but the sequence has frame " << last;
-  } else {
+  } else if (files_.layout == SequenceFiles::Layout::kSamp) {
     LogInfo() << files_.name << ": no poses/" << files_.name
               << ".txt, assuming a static camera (identity ego poses)";
   }
@@ -271,9 +341,13 @@ std::vector<ObjectLabel> SequenceReader::ReadDetections(int index) const {
     source = detections_source_ + " (frame " + std::to_string(f.frame) + ")";
   } else {
     SAMP_CHECK(!detections_source_.empty())
-        << "KITTI tracking sequence " << files_.directory << " has no detections: give a detection file or "
-        << "folder (samp fit --detections; e.g. the ground truth, --detections " << fs::path(files_.calibration).parent_path().parent_path().string()
-        << "/label_02) or tracks (--tracks)";
+        << (files_.layout == SequenceFiles::Layout::kKittiStereo ? "KITTI stereo sequence " : "KITTI tracking sequence ")
+        << files_.directory << " has no detections: give a detection file or folder (samp fit --detections"
+        << (files_.layout == SequenceFiles::Layout::kKittiTracking
+                ? "; e.g. the ground truth, --detections " +
+                      fs::path(files_.calibration).parent_path().parent_path().string() + "/label_02"
+                : std::string())
+        << ") or tracks (--tracks)";
     SAMP_CHECK(!f.detections.empty())
         << "sequence " << files_.directory << ": missing "
         << (options_.detections_path.empty() ? std::string("detections") : detections_source_) << "/"
@@ -474,13 +548,19 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
   result.name = files.name;
   result.poses_from_file = reader.has_poses();
   result.label_frame_offset = reader.label_frame_offset();
+  if (files.layout == SequenceFiles::Layout::kKittiStereo) {
+    result.layout = "kitti-stereo";
+    result.messages.push_back(files.name + ": KITTI stereo 2015 layout (" + files.calibration +
+                              "), no ego poses: static camera assumed");
+  }
   if (files.layout == SequenceFiles::Layout::kKittiTracking) {
     result.layout = "kitti-tracking";
     result.messages.push_back(files.name + ": KITTI tracking layout, ego poses from " + files.oxts +
                               ", detections from " +
                               (options.tracking_labels_path.empty() ? reader.detections_source() : "--tracks"));
   }
-  if (!reader.has_poses()) result.messages.push_back(files.name + ": no poses file, static camera assumed");
+  if (!reader.has_poses() && files.layout == SequenceFiles::Layout::kSamp)
+    result.messages.push_back(files.name + ": no poses file, static camera assumed");
 
   std::vector<int> indices;  // frame indices within the range
   std::map<int, int> index_of_frame;

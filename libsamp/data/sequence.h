@@ -68,7 +68,7 @@ struct FrameFiles {
 
 // What a sequence directory contains (nothing read yet but the listing).
 struct SequenceFiles {
-  enum class Layout { kSamp, kKittiTracking };
+  enum class Layout { kSamp, kKittiTracking, kKittiStereo };
   Layout layout = Layout::kSamp;
   std::string directory;
   std::string name;         // <seq>
@@ -86,7 +86,16 @@ struct SequenceFiles {
 // (KittiTrackingLayout::FromSequenceFolder): its frames are the <ffffff>.png
 // of that folder, its calibration ROOT/calib/<seq>.txt and its ego poses
 // ROOT/oxts/<seq>.txt (both required).
+// A file ROOT/calib_cam_to_cam/<seq>.txt is a sequence of KITTI stereo 2015's
+// (multiview) layout: frames <seq>_<ff>.png in ROOT/image_2 and ROOT/image_3
+// (00..20 in the multiview set), P_rect_02 and P_rect_03 from that file, no
+// ego poses (static camera), labels in rectified camera 0 as KITTI tracking's.
 SequenceFiles ListSequence(const std::string& directory);
+// The calibration files ROOT/calib_cam_to_cam/<seq>.txt of `sequences` ("all":
+// every one that has ROOT/image_2/<seq>_*.png, sorted; or a comma-separated
+// list, numbers padded to six digits: "46" -> "000046"); throws naming what
+// is missing.
+std::vector<std::string> KittiStereoSequences(const std::string& root, const std::string& sequences);
 
 // One frame, read.
 struct SequenceFrame {
@@ -145,7 +154,7 @@ struct SequenceSummary {
   int num_frames = 0;
   bool poses_from_file = false;
   bool tracks_from_labels = false;
-  std::string layout = "samp";  // "samp" or "kitti-tracking"
+  std::string layout = "samp";  // "samp", "kitti-tracking" or "kitti-stereo"
   // SequenceReader::label_frame_offset: written labels are moved by it
   // (LabelsInLayoutFrame).
   Eigen::Vector3d label_frame_offset = Eigen::Vector3d::Zero();

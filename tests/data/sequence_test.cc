@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "libsamp/core/error.h"
@@ -511,6 +513,68 @@ TEST_F(KittiTrackingSequenceTest, BadInputNamesFileAndLine) {
   in.close();
   std::ofstream(layout.Calibration()) << text;
   ExpectError([&] { LoadSequenceTracks(folder_, options); }, {"calib/0007.txt: no Tr_imu_velo line"});
+}
+
+// The fixture's sequence in KITTI stereo 2015's (multiview) layout:
+// ROOT/image_2|image_3/000007_<ff>.png, ROOT/calib_cam_to_cam/000007.txt
+// (P_rect_02 with camera 2 6 cm right of camera 0, among other entries), the
+// detections as per-frame KITTI object files in rectified camera 0. Without
+// poses both are a static camera.
+TEST_F(SequenceTest, KittiStereoLayoutGivesTheTracksOfSampsLayout) {
+  const fs::path root = dir_.parent_path() / "stereo";
+  fs::create_directories(root / "calib_cam_to_cam");
+  fs::copy(dir_ / "image_2", root / "image_2");
+  fs::copy(dir_ / "image_3", root / "image_3");
+  const StereoCalibration c = SmallCalibration();
+  Eigen::Matrix3d k;
+  k << c.camera.fx, 0, c.camera.cx, 0, c.camera.fy, c.camera.cy, 0, 0, 1;
+  const Eigen::Vector3d t2(0.06, 0.0, 0.0027);
+  auto row = [&](const Eigen::Vector3d& t) {
+    Eigen::Matrix<double, 3, 4> p;
+    p << k, k * t;
+    std::ostringstream s;
+    s << std::setprecision(17);
+    for (int r = 0; r < 3; ++r)
+      for (int q = 0; q < 4; ++q) s << ' ' << p(r, q);
+    return s.str();
+  };
+  std::ofstream(root / "calib_cam_to_cam" / "000007.txt")
+      << "calib_time: 09-Jan-2012 13:57:47\ncorner_dist: 9.950000e-02\nS_02: 1.392000e+03 5.120000e+02\n"
+      << "P_rect_00:" << row(Eigen::Vector3d::Zero()) << "\nP_rect_01:" << row(Eigen::Vector3d(-0.54, 0, 0))
+      << "\nP_rect_02:" << row(t2) << "\nP_rect_03:" << row(t2 - Eigen::Vector3d(c.baseline, 0, 0)) << "\n";
+  for (int t = 0; t < kFrames; ++t) {
+    std::vector<ObjectLabel> moved;
+    for (const ObjectLabel& label : ReadLabels((dir_ / "detections" / (Tag(t) + ".txt")).string()))
+      moved.push_back(MoveLabel(label, -t2));
+    WriteLabels((root / "detections" / (Tag(t) + ".txt")).string(), moved);
+  }
+  fs::remove_all(dir_ / "disparity");
+  fs::remove_all(dir_ / "planes");
+  fs::remove_all(dir_ / "poses");
+  SequenceOptions options;
+  options.stereo.num_disparities = 32;
+  SequenceSummary samp_summary, stereo_summary;
+  const std::vector<Track> samp = LoadSequenceTracks(dir_.string(), options, &samp_summary);
+  const std::vector<std::string> sequences = KittiStereoSequences(root.string(), "7");
+  ASSERT_EQ(sequences.size(), 1u);
+  EXPECT_EQ(KittiStereoSequences(root.string(), "all"), sequences);
+  ExpectError([&] { LoadSequenceTracks(sequences[0], options); }, {"KITTI stereo sequence", "has no detections"});
+  options.detections_path = (root / "detections").string();
+  const std::vector<Track> stereo = LoadSequenceTracks(sequences[0], options, &stereo_summary);
+  EXPECT_EQ(stereo_summary.layout, "kitti-stereo");
+  EXPECT_EQ(stereo_summary.name, "000007");
+  EXPECT_FALSE(stereo_summary.poses_from_file);
+  EXPECT_LT((stereo_summary.label_frame_offset + t2).norm(), 1e-12);
+  ASSERT_EQ(stereo.size(), 1u);
+  ASSERT_EQ(stereo[0].frames.size(), samp[0].frames.size());
+  for (size_t i = 0; i < samp[0].frames.size(); ++i) {
+    const TrackFrame &a = samp[0].frames[i], &b = stereo[0].frames[i];
+    EXPECT_LT((a.detection.position - b.detection.position).norm(), 2e-4);  // 4 decimals, moved twice
+    ASSERT_EQ(a.candidate_points_in_world.size(), b.candidate_points_in_world.size());
+    for (size_t q = 0; q < a.candidate_points_in_world.size(); ++q)
+      ASSERT_LT((a.candidate_points_in_world[q] - b.candidate_points_in_world[q]).norm(), 1e-9);
+  }
+  ExpectError([&] { KittiStereoSequences(root.string(), "000008"); }, {"has no sequence 000008"});
 }
 
 TEST(RealKittiTest, ReadsFrame10) {

@@ -10,6 +10,7 @@
 #include "libsamp/core/log.h"
 #include "libsamp/pipeline/run_fit.h"
 #include "libsamp/data/kitti_tracking.h"
+#include "libsamp/data/sequence.h"
 #include "libsamp/data/tracker_option_table.h"
 #include "libsamp/fit/fit_option_table.h"
 #include "libsamp/viz/fit_pictures.h"
@@ -39,6 +40,7 @@ void ParseFrameRange(const std::string& range, SequenceOptions* options) {
 // Where the inputs are, besides --seq: KITTI tracking sequences, frames, detections.
 struct InputSource {
   std::string kitti_root;
+  std::string kitti_stereo_root;
   std::string kitti_sequences = "all";
   std::string frames;
   std::string object_types;
@@ -71,8 +73,14 @@ void RegisterFitCommand(CLI::App* app) {
                       "oxts); ego poses from oxts/")
       ->check(CLI::ExistingDirectory)
       ->group(input_group);
+  command->add_option("--kitti-stereo", source->kitti_stereo_root,
+                      "KITTI stereo 2015 (multiview) folder in its own layout (image_2/<seq>_<ff>.png, image_3, "
+                      "calib_cam_to_cam/<seq>.txt); no ego poses: static camera")
+      ->check(CLI::ExistingDirectory)
+      ->group(input_group);
   command->add_option("--sequence", source->kitti_sequences,
-                      "With --kitti-tracking: sequences to fit, comma-separated (0004,0011) or all")
+                      "With --kitti-tracking or --kitti-stereo: sequences to fit, comma-separated (0004,0011; "
+                      "000046) or all")
       ->capture_default_str()
       ->group(input_group);
   command->add_option("--frames", source->frames, "Fit only frames FIRST-LAST (e.g. 100-300) of each sequence")
@@ -154,7 +162,11 @@ void RegisterFitCommand(CLI::App* app) {
       for (const std::string& folder : KittiTrackingSequenceFolders(source->kitti_root, source->kitti_sequences))
         options->sequences.push_back(folder);
     }
-    if (options->sequences.empty()) throw CLI::RequiredError("--seq or --kitti-tracking");
+    if (!source->kitti_stereo_root.empty()) {
+      for (const std::string& file : KittiStereoSequences(source->kitti_stereo_root, source->kitti_sequences))
+        options->sequences.push_back(file);
+    }
+    if (options->sequences.empty()) throw CLI::RequiredError("--seq, --kitti-tracking or --kitti-stereo");
     if (!source->frames.empty()) ParseFrameRange(source->frames, &options->sequence);
     if (!source->object_types.empty()) {
       options->sequence.object_types.clear();
