@@ -65,8 +65,8 @@ void RegisterFitCommand(CLI::App* app) {
   command->add_option("--model", o.model_path, "Shape model file (.vdb); default: the shipped model")
       ->capture_default_str();
   command->add_option("--seq", o.sequences,
-                      "Sequence directory (docs/sequence_format.md; samp's layout, or a KITTI tracking "
-                      "ROOT/image_02/<seq>); repeat for a batch");
+                      "Sequence directory (docs/sequence_format.md; samp's layout, a KITTI tracking "
+                      "ROOT/image_02/<seq> or a KITTI stereo ROOT/calib_cam_to_cam/<seq>.txt); repeat for a batch");
   const std::string input_group = "Input (docs/sequence_format.md)";
   command->add_option("--kitti-tracking", source->kitti_root,
                       "KITTI tracking folder in its own layout (training/ or testing/: image_02, image_03, calib, "
@@ -157,7 +157,9 @@ void RegisterFitCommand(CLI::App* app) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   AddCommonOptions(command);
-  command->callback([options, visuals, source] {
+  command->callback([options, visuals, source, command] {
+    SAMP_CHECK(command->count("--sequence") == 0 || !source->kitti_root.empty() || !source->kitti_stereo_root.empty())
+        << "--sequence names sequences of --kitti-tracking or --kitti-stereo; give one of them (or --seq)";
     if (!source->kitti_root.empty()) {
       for (const std::string& folder : KittiTrackingSequenceFolders(source->kitti_root, source->kitti_sequences))
         options->sequences.push_back(folder);
