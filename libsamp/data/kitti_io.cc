@@ -18,9 +18,11 @@
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/data/kitti_text.h"
 
 namespace samp {
-namespace {
+// The text helpers are shared with the other KITTI readers (data/kitti_text.h).
+namespace kitti_text {
 
 // A text file read into lines, for parsers that report "path:line: problem".
 struct TextFile {
@@ -225,7 +227,9 @@ std::string FormatMatrixRow(const Eigen::Matrix<double, 3, 4>& m) {
   return s.str();
 }
 
-}  // namespace
+}  // namespace kitti_text
+
+using namespace kitti_text;
 
 bool SameObjectType(const std::string& a, const std::string& b) {
   return a.size() == b.size() &&
@@ -248,8 +252,9 @@ StereoCalibration ReadCalibration(const std::string& path, int image_width, int 
     const std::vector<std::string> tokens = Tokenize(file.lines[i]);
     if (tokens.empty()) continue;
     int which = -1;
-    if (tokens[0] == "P2:") which = 0;
-    if (tokens[0] == "P3:") which = 1;
+    // KITTI stereo 2015's calib_cam_to_cam names them P_rect_02 / P_rect_03.
+    if (tokens[0] == "P2:" || tokens[0] == "P_rect_02:") which = 0;
+    if (tokens[0] == "P3:" || tokens[0] == "P_rect_03:") which = 1;
     if (which < 0) continue;
     SAMP_CHECK(line_of[which] == 0) << At(path, n) << tokens[0] << " given twice (first on line "
                                     << line_of[which] << ")";
@@ -264,8 +269,10 @@ StereoCalibration ReadCalibration(const std::string& path, int image_width, int 
     }
     line_of[which] = n;
   }
-  SAMP_CHECK(line_of[0] > 0) << path << ": no 'P2:' line (left camera)";
-  SAMP_CHECK(line_of[1] > 0) << path << ": no 'P3:' line (right camera), needed for the baseline";
+  SAMP_CHECK(line_of[0] > 0) << path << ": no 'P2:' line (left camera; 'P_rect_02:' in calib_cam_to_cam)";
+  SAMP_CHECK(line_of[1] > 0) << path
+                             << ": no 'P3:' line (right camera; 'P_rect_03:' in calib_cam_to_cam), needed for the "
+                                "baseline";
   StereoCalibration calibration;
   PinholeCamera& camera = calibration.camera;
   camera.fx = p[0](0, 0);
@@ -298,6 +305,22 @@ StereoCalibration ReadCalibration(const std::string& path, int image_width, int 
       << path << ": baseline (P2[0,3] - P3[0,3]) / fx = " << calibration.baseline
       << " m is not plausible for a stereo rig (> " << kMaxBaseline << " m)";
   return calibration;
+}
+
+Eigen::Vector3d ReadCamera2Offset(const std::string& path) {
+  const StereoCalibration calibration = ReadCalibration(path);  // checks the file
+  const TextFile file = ReadTextFile(path, "calibration");
+  for (const std::string& line : file.lines) {
+    const std::vector<std::string> tokens = Tokenize(line);
+    if (tokens.size() != 13 || (tokens[0] != "P2:" && tokens[0] != "P_rect_02:")) continue;
+    const PinholeCamera& c = calibration.camera;
+    const Eigen::Vector3d column(std::strtod(tokens[4].c_str(), nullptr), std::strtod(tokens[8].c_str(), nullptr),
+                                 std::strtod(tokens[12].c_str(), nullptr));
+    Eigen::Matrix3d k;
+    k << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1;
+    return k.inverse() * column;
+  }
+  return Eigen::Vector3d::Zero();
 }
 
 void WriteCalibration(const std::string& path, const StereoCalibration& calibration) {

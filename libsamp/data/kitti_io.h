@@ -31,8 +31,13 @@ constexpr double kMaxCalibrationValue = 1e9;
 constexpr double kMinFocalLengthPx = 1.0;
 constexpr double kMaxFocalLengthPx = 1e5;
 constexpr double kMaxBaseline = 10.0;  // m
+// KITTI stereo 2015's calib_cam_to_cam/<seq>.txt is read too: its
+// "P_rect_02:" and "P_rect_03:" lines are P2 and P3.
 StereoCalibration ReadCalibration(const std::string& path, int image_width = 0,
                                   int image_height = 0);
+// t2 = K^-1 P2[:, 3] of such a file: the left colour camera relative to
+// rectified camera 0, the frame of KITTI's labels (data/kitti_tracking.h).
+Eigen::Vector3d ReadCamera2Offset(const std::string& path);
 // Writes "P2: ..." and "P3: ..." lines for `calibration` (P2 with zero
 // translation column, P3(0,3) = -fx * baseline).
 void WriteCalibration(const std::string& path, const StereoCalibration& calibration);

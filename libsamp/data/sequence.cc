@@ -11,7 +11,9 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/data/detection_files.h"
 #include "libsamp/data/kitti_io.h"
+#include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/sequence_layout.h"
 
 namespace samp {
@@ -56,10 +58,126 @@ void SequenceOptions::Check() const {
   SAMP_CHECK(!object_types.empty()) << "SequenceOptions.object_types must not be empty";
   SAMP_CHECK(last_frame < 0 || first_frame < 0 || first_frame <= last_frame)
       << "SequenceOptions.first_frame = " << first_frame << " is after last_frame = " << last_frame;
+  try {
+    ParseDetectionFormat(detection_format);
+  } catch (const Error& e) {
+    SAMP_THROW() << "SequenceOptions.detection_format: " << e.what();
+  }
   SAMP_CHECK(max_image_bytes > 0) << "SequenceOptions.max_image_bytes must be > 0, is " << max_image_bytes;
 }
 
+namespace {
+
+// A sequence of KITTI tracking's layout (data/kitti_tracking.h).
+SequenceFiles ListKittiTrackingSequence(const std::string& directory, const KittiTrackingLayout& layout) {
+  std::error_code error;
+  SequenceFiles files;
+  files.layout = SequenceFiles::Layout::kKittiTracking;
+  files.directory = directory;
+  files.name = layout.name();
+  files.calibration = layout.Calibration();
+  SAMP_CHECK(fs::is_regular_file(files.calibration, error))
+      << "KITTI tracking sequence " << directory << ": missing " << files.calibration
+      << " (P0..P3, R_rect, Tr_velo_cam, Tr_imu_velo)";
+  files.oxts = layout.Oxts();
+  SAMP_CHECK(fs::is_regular_file(files.oxts, error))
+      << "KITTI tracking sequence " << directory << ": missing " << files.oxts << " (GPS/IMU, the ego poses)";
+  std::map<int, std::string> left, right;
+  for (const auto& [folder, m] : {std::pair{layout.LeftImageFolder(), &left}, std::pair{layout.RightImageFolder(), &right}}) {
+    if (!fs::is_directory(folder, error)) continue;
+    for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
+      if (!entry.is_regular_file()) continue;
+      const int frame = KittiTrackingLayout::FrameOfFileName(entry.path().string(), ".png");
+      if (frame < 0) continue;
+      SAMP_CHECK(m->count(frame) == 0) << folder << ": two files for frame " << frame << " ("
+                                       << (*m)[frame] << ", " << entry.path().string() << ")";
+      (*m)[frame] = entry.path().string();
+    }
+  }
+  SAMP_CHECK(!left.empty()) << "KITTI tracking sequence " << directory << ": no <ffffff>.png images";
+  for (const auto& [frame, path] : left) {
+    FrameFiles f;
+    f.frame = frame;
+    f.image_left = path;
+    const auto it = right.find(frame);
+    if (it != right.end()) f.image_right = it->second;
+    files.frames.push_back(f);
+  }
+  return files;
+}
+
+// A sequence of KITTI stereo 2015's layout, named by its calibration file
+// ROOT/calib_cam_to_cam/<seq>.txt.
+SequenceFiles ListKittiStereoSequence(const std::string& calibration) {
+  const fs::path root = fs::path(calibration).parent_path().parent_path();
+  SequenceFiles files;
+  files.layout = SequenceFiles::Layout::kKittiStereo;
+  files.directory = calibration;
+  files.name = fs::path(calibration).stem().string();
+  files.calibration = calibration;
+  const auto left = ListFrameFiles(root / SequenceLayout::kLeftImageFolder, files.name, ".png");
+  const auto right = ListFrameFiles(root / SequenceLayout::kRightImageFolder, files.name, ".png");
+  SAMP_CHECK(!left.empty()) << "KITTI stereo sequence " << calibration << ": no "
+                            << (root / SequenceLayout::kLeftImageFolder / (files.name + "_<ff>.png")).string()
+                            << " images";
+  for (const auto& [frame, path] : left) {
+    FrameFiles f;
+    f.frame = frame;
+    f.image_left = path;
+    const auto it = right.find(frame);
+    if (it != right.end()) f.image_right = it->second;
+    files.frames.push_back(f);
+  }
+  return files;
+}
+
+bool IsKittiStereoCalibration(const std::string& path) {
+  std::error_code error;
+  return fs::is_regular_file(path, error) && fs::path(path).parent_path().filename() == "calib_cam_to_cam";
+}
+
+}  // namespace
+
+std::vector<std::string> KittiStereoSequences(const std::string& root, const std::string& sequences) {
+  std::error_code error;
+  const fs::path calib = fs::path(root) / "calib_cam_to_cam";
+  SAMP_CHECK(fs::is_directory(calib, error))
+      << "KITTI stereo root " << root << " has no calib_cam_to_cam/ folder (P_rect_02, P_rect_03 per sequence)";
+  std::vector<std::string> names;
+  if (sequences == "all") {
+    for (const fs::directory_entry& entry : fs::directory_iterator(calib)) {
+      if (!entry.is_regular_file() || entry.path().extension() != ".txt") continue;
+      const std::string name = entry.path().stem().string();
+      if (!ListFrameFiles(fs::path(root) / SequenceLayout::kLeftImageFolder, name, ".png").empty()) names.push_back(name);
+    }
+    std::sort(names.begin(), names.end());
+    SAMP_CHECK(!names.empty()) << root << ": no sequence has both calib_cam_to_cam/<seq>.txt and image_2/<seq>_<ff>.png";
+  } else {
+    std::stringstream list(sequences);
+    for (std::string name; std::getline(list, name, ',');) {
+      name.erase(0, name.find_first_not_of(" \t"));
+      name.erase(name.find_last_not_of(" \t") + 1);
+      SAMP_CHECK(!name.empty()) << "--sequence '" << sequences << "': empty sequence name";
+      if (name.size() < 6 && name.find_first_not_of("0123456789") == std::string::npos)
+        name = std::string(6 - name.size(), '0') + name;
+      SAMP_CHECK(std::find(names.begin(), names.end(), name) == names.end()) << "--sequence lists " << name << " twice";
+      names.push_back(name);
+    }
+  }
+  std::vector<std::string> files;
+  for (const std::string& name : names) {
+    const fs::path file = calib / (name + ".txt");
+    SAMP_CHECK(fs::is_regular_file(file, error)) << "KITTI stereo root " << root << " has no sequence " << name
+                                                  << " (no " << file.string() << ")";
+    files.push_back(file.string());
+  }
+  return files;
+}
+
 SequenceFiles ListSequence(const std::string& directory) {
+  KittiTrackingLayout kitti("", "");
+  if (KittiTrackingLayout::FromSequenceFolder(directory, &kitti)) return ListKittiTrackingSequence(directory, kitti);
+  if (IsKittiStereoCalibration(directory)) return ListKittiStereoSequence(directory);
   const fs::path root(directory);
   std::error_code error;
   SAMP_CHECK(fs::is_directory(root, error)) << "sequence directory " << directory << " does not exist";
@@ -141,16 +259,68 @@ SequenceReader::SequenceReader(const std::string& directory, const SequenceOptio
   // 0x0: the size is not known, the principal point is not checked against it.
   calibration_ = size_known ? ReadCalibration(files_.calibration, width, height)
                             : ReadCalibration(files_.calibration);
-  if (!files_.poses.empty()) {
+  if (files_.layout == SequenceFiles::Layout::kKittiTracking) {
+    const KittiTrackingCalibration kitti = ReadKittiTrackingCalibration(files_.calibration);
+    camera_from_label_frame_ = kitti.Camera2FromRectified0();
+    const std::vector<OxtsRecord> records = ReadOxts(files_.oxts);
+    const int last = files_.frames.back().frame;
+    SAMP_CHECK(static_cast<int>(records.size()) > last)
+        << files_.oxts << ":" << records.size() + 1 << ": no GPS/IMU record for frame " << records.size()
+        << " (the file has " << records.size() << " lines, the sequence has frames up to " << last << ")";
+    poses_ = CameraPosesFromOxts(records, kitti);
+  } else if (files_.layout == SequenceFiles::Layout::kKittiStereo) {
+    camera_from_label_frame_ = ReadCamera2Offset(files_.calibration);
+    LogInfo() << files_.name << ": KITTI stereo 2015 has no ego poses, assuming a static camera";
+  } else if (!files_.poses.empty()) {
     poses_ = ReadPoses(files_.poses);
     const int last = files_.frames.back().frame;
     SAMP_CHECK(static_cast<int>(poses_.size()) > last)
         << files_.poses << ": " << poses_.size() << " poses (frames 0.." << poses_.size() - 1
         << "), but the sequence has frame " << last;
-  } else {
+  } else if (files_.layout == SequenceFiles::Layout::kSamp) {
     LogInfo() << files_.name << ": no poses/" << files_.name
               << ".txt, assuming a static camera (identity ego poses)";
   }
+  ResolveDetections();
+}
+
+void SequenceReader::ResolveDetections() {
+  std::error_code error;
+  const std::string& path = options_.detections_path;
+  const DetectionFormat format = ParseDetectionFormat(options_.detection_format);
+  if (path.empty()) {
+    if (files_.layout == SequenceFiles::Layout::kSamp)
+      detections_source_ = (fs::path(files_.directory) / SequenceLayout::kDetectionsFolder).string();
+    return;  // KITTI tracking: none (an error when they are read)
+  }
+  std::string file = path;
+  if (fs::is_directory(path, error)) {
+    file = (fs::path(path) / (files_.name + ".txt")).string();
+    if (format == DetectionFormat::kKittiObject || !fs::is_regular_file(file, error)) {
+      // Per-frame KITTI object files <folder>/<seq>_<ff>.txt.
+      SAMP_CHECK(format == DetectionFormat::kAuto || format == DetectionFormat::kKittiObject)
+          << "detections folder " << path << " has no " << files_.name << ".txt for --detection-format "
+          << options_.detection_format;
+      for (FrameFiles& f : files_.frames) {
+        const std::string frame_file = (fs::path(path) / SequenceLayout::FrameFileName(files_.name, f.frame, ".txt")).string();
+        f.detections = fs::is_regular_file(frame_file, error) ? frame_file : std::string();
+      }
+      detections_source_ = path;
+      return;
+    }
+  }
+  SAMP_CHECK(fs::is_regular_file(file, error)) << "detections " << path << " do not exist";
+  detections_source_ = file;
+  detections_from_file_ = true;
+  std::set<int> frames;
+  for (const FrameFiles& f : files_.frames) frames.insert(f.frame);
+  for (ObjectLabel& label : ReadDetectionFile(file, format)) {
+    SAMP_CHECK(frames.count(label.frame) > 0)
+        << file << ": a detection in frame " << label.frame << ", which sequence " << files_.name
+        << " does not have (frames " << *frames.begin() << ".." << *frames.rbegin() << ")";
+    file_detections_[label.frame].push_back(label);
+  }
+  LogInfo() << files_.name << ": detections from " << file;
 }
 
 Eigen::Isometry3d SequenceReader::WorldFromCamera(int frame) const {
@@ -163,18 +333,37 @@ Eigen::Isometry3d SequenceReader::WorldFromCamera(int frame) const {
 std::vector<ObjectLabel> SequenceReader::ReadDetections(int index) const {
   SAMP_CHECK(index >= 0 && index < num_frames()) << "SequenceReader: frame index " << index << " out of range";
   const FrameFiles& f = files_.frames[index];
-  SAMP_CHECK(!f.detections.empty())
-      << "sequence " << files_.directory << ": missing detections/" << SequenceLayout::FrameTag(files_.name, f.frame)
-      << ".txt (an empty file means no detections)";
+  std::vector<ObjectLabel> labels;
+  std::string source = f.detections;
+  if (detections_from_file_) {
+    const auto it = file_detections_.find(f.frame);
+    if (it != file_detections_.end()) labels = it->second;
+    source = detections_source_ + " (frame " + std::to_string(f.frame) + ")";
+  } else {
+    SAMP_CHECK(!detections_source_.empty())
+        << (files_.layout == SequenceFiles::Layout::kKittiStereo ? "KITTI stereo sequence " : "KITTI tracking sequence ")
+        << files_.directory << " has no detections: give a detection file or folder (samp fit --detections"
+        << (files_.layout == SequenceFiles::Layout::kKittiTracking
+                ? "; e.g. the ground truth, --detections " +
+                      fs::path(files_.calibration).parent_path().parent_path().string() + "/label_02"
+                : std::string())
+        << ") or tracks (--tracks)";
+    SAMP_CHECK(!f.detections.empty())
+        << "sequence " << files_.directory << ": missing "
+        << (options_.detections_path.empty() ? std::string("detections") : detections_source_) << "/"
+        << SequenceLayout::FrameTag(files_.name, f.frame) << ".txt (an empty file means no detections)";
+    labels = ReadLabels(f.detections);
+  }
   std::vector<ObjectLabel> kept;
   int number = 0;
-  for (ObjectLabel& label : ReadLabels(f.detections)) {
+  for (ObjectLabel& label : labels) {
     ++number;
     if (!TypeKept(label.type, options_) || label.score < options_.min_detection_score) continue;
     // The tracker needs a box with a volume; say which file holds one without.
     SAMP_CHECK(label.height > 0 && label.width > 0 && label.length > 0)
-        << f.detections << ": detection " << number << " (" << label.type << ") has a zero size h w l = "
+        << source << ": detection " << number << " (" << label.type << ") has a zero size h w l = "
         << label.height << " " << label.width << " " << label.length << " m";
+    label = MoveLabel(label, camera_from_label_frame_);
     label.frame = f.frame;
     kept.push_back(label);
   }
@@ -195,8 +384,10 @@ SequenceFrame SequenceReader::ReadFrame(int index, bool with_detections) const {
     frame.disparity_px = ReadDisparity(f.disparity, size, options_.max_image_bytes);
   } else {
     SAMP_CHECK(!f.image_left.empty() && !f.image_right.empty())
-        << "sequence " << files_.directory << ": frame " << tag << " has no disparity/" << tag
-        << ".png and no image_2/image_3 pair to compute it from";
+        << "sequence " << files_.directory << ": frame " << tag << " has "
+        << (files_.layout == SequenceFiles::Layout::kKittiTracking
+                ? "no image_03 image (" + KittiTrackingLayout(fs::path(files_.calibration).parent_path().parent_path().string(), files_.name).RightImage(f.frame) + ") to compute the disparity with"
+                : "no disparity/" + tag + ".png and no image_2/image_3 pair to compute it from");
     const cv::Mat left = ReadImage(f.image_left, cv::IMREAD_GRAYSCALE, "left image", options_.max_image_bytes);
     const cv::Mat right = ReadImage(f.image_right, cv::IMREAD_GRAYSCALE, "right image", options_.max_image_bytes);
     SAMP_CHECK(left.size() == size && right.size() == size)
@@ -237,6 +428,10 @@ SequenceFrame SequenceReader::ReadFrame(int index, bool with_detections) const {
     }
   }
   return frame;
+}
+
+void LabelsInLayoutFrame(const SequenceSummary& summary, std::vector<ObjectLabel>* labels) {
+  for (ObjectLabel& label : *labels) label = MoveLabel(label, summary.label_frame_offset);
 }
 
 std::string SequenceSummary::BriefReport() const {
@@ -292,7 +487,7 @@ std::vector<LinkedTrack> LinkSequenceTracks(const std::string& directory, const 
     SAMP_CHECK(index_of_frame.count(label.frame) > 0)
         << options.tracking_labels_path << ": track " << label.track_id << " has a label in frame "
         << label.frame << ", which sequence " << directory << " does not have";
-    labels.push_back(label);
+    labels.push_back(MoveLabel(label, -reader.label_frame_offset()));
   }
   result->tracks_from_labels = true;
   return TracksFromLabels(labels, tracker.min_track_length, &result->tracking);
@@ -352,7 +547,20 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
   result = SequenceSummary();
   result.name = files.name;
   result.poses_from_file = reader.has_poses();
-  if (!reader.has_poses()) result.messages.push_back(files.name + ": no poses file, static camera assumed");
+  result.label_frame_offset = reader.label_frame_offset();
+  if (files.layout == SequenceFiles::Layout::kKittiStereo) {
+    result.layout = "kitti-stereo";
+    result.messages.push_back(files.name + ": KITTI stereo 2015 layout (" + files.calibration +
+                              "), no ego poses: static camera assumed");
+  }
+  if (files.layout == SequenceFiles::Layout::kKittiTracking) {
+    result.layout = "kitti-tracking";
+    result.messages.push_back(files.name + ": KITTI tracking layout, ego poses from " + files.oxts +
+                              ", detections from " +
+                              (options.tracking_labels_path.empty() ? reader.detections_source() : "--tracks"));
+  }
+  if (!reader.has_poses() && files.layout == SequenceFiles::Layout::kSamp)
+    result.messages.push_back(files.name + ": no poses file, static camera assumed");
 
   std::vector<int> indices;  // frame indices within the range
   std::map<int, int> index_of_frame;

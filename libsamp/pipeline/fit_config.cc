@@ -54,6 +54,9 @@ void OptionFields(OptionsJson& io, SequenceOptions& o) {
   io("min_detection_score", o.min_detection_score);
   io("first_frame", o.first_frame);
   io("last_frame", o.last_frame);
+  // Detection sources (issue 31; data/sequence.h), written only when given.
+  io.Optional("detections", o.detections_path, std::string());
+  io.Optional("detection_format", o.detection_format, std::string("auto"));
 }
 
 void OptionFields(OptionsJson& io, RunFitOptions& o) {

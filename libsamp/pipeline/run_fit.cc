@@ -78,6 +78,7 @@ bool CheckOutputFolder(const RunFitOptions& options) {
   for (const std::string& seq : options.sequences) inputs.emplace_back("sequence", seq);
   for (const std::string& labels : options.tracking_labels) inputs.emplace_back("tracking label file", labels);
   if (!options.link_only) inputs.emplace_back("model", options.model_path);
+  inputs.emplace_back("detections", options.sequence.detections_path);
   for (const auto& [what, path] : inputs) {
     SAMP_CHECK(path.empty() || !IsInsideFolder(path, out_name))
         << "output folder " << out_name << " holds the input " << what << " " << path << why
@@ -122,6 +123,7 @@ std::string MeshPrefix(const RunFitOptions& options, const std::string& seq, int
 // Writes FOLDER/label_02/<seq>.txt, the labels by frame and then track id; a
 // failure marks the sequence as failed.
 void WriteSequenceLabels(const std::string& folder, std::vector<ObjectLabel> labels, SequenceFitResult* result) {
+  LabelsInLayoutFrame(result->input, &labels);  // KITTI tracking: rectified camera 0 (data/sequence.h)
   std::stable_sort(labels.begin(), labels.end(), [](const ObjectLabel& a, const ObjectLabel& b) {
     return a.frame != b.frame ? a.frame < b.frame : a.track_id < b.track_id;
   });

@@ -13,6 +13,7 @@
 #include "libsamp/core/json_text.h"
 #include "libsamp/core/ply_io.h"
 #include "libsamp/data/kitti_io.h"
+#include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/sequence_layout.h"
 #include "libsamp/data/stereo.h"
 #include "libsamp/scan/embree_scene.h"
@@ -176,6 +177,15 @@ StereoView RenderStereo(const SynthOptions& options, const Scene& scene, int t, 
   return view;
 }
 
+// Per car its visible pixels in the left view.
+std::vector<int> VisiblePixels(const Scene& scene, const RenderBuffers& left) {
+  const int num_statics = int(scene.statics.size());
+  std::vector<int> visible(scene.cars.size(), 0);
+  for (size_t pixel = 0; pixel < size_t(left.height) * left.width; ++pixel)
+    if (left.mesh_index[pixel] >= num_statics) ++visible[left.mesh_index[pixel] - num_statics];
+  return visible;
+}
+
 // Ground truth of frame t: depth (uint16, 1/256 m) and object map (uint8,
 // track_id + 1). Returns per car its visible pixels.
 std::vector<int> WriteGroundTruthMaps(const Scene& scene, const RenderBuffers& left, const SequenceLayout& layout,
@@ -183,7 +193,6 @@ std::vector<int> WriteGroundTruthMaps(const Scene& scene, const RenderBuffers& l
   const int num_statics = int(scene.statics.size());
   cv::Mat depth(left.height, left.width, CV_16UC1, cv::Scalar(0));
   cv::Mat object_map(left.height, left.width, CV_8UC1, cv::Scalar(0));
-  std::vector<int> visible(scene.cars.size(), 0);
   for (int v = 0; v < left.height; ++v) {
     for (int u = 0; u < left.width; ++u) {
       const size_t pixel = size_t(v) * left.width + u;
@@ -192,16 +201,12 @@ std::vector<int> WriteGroundTruthMaps(const Scene& scene, const RenderBuffers& l
         depth.at<uint16_t>(v, u) = uint16_t(std::lround(double(z) * 256.0));
       }
       const int index = left.mesh_index[pixel];
-      if (index >= num_statics) {
-        const int car = index - num_statics;
-        object_map.at<uint8_t>(v, u) = uint8_t(scene.cars[car].track_id + 1);
-        ++visible[car];
-      }
+      if (index >= num_statics) object_map.at<uint8_t>(v, u) = uint8_t(scene.cars[index - num_statics].track_id + 1);
     }
   }
   WriteImage(layout.GroundTruthDepth(t), depth);
   WriteImage(layout.GroundTruthObjectMap(t), object_map);
-  return visible;
+  return VisiblePixels(scene, left);
 }
 
 // Disparity quality on the car pixels (what the stereo baseline and the fitter see).
@@ -297,10 +302,58 @@ nlohmann::json SceneJson(const SynthOptions& options, const Scene& scene, const 
   return scene_json;
 }
 
+// The scene in KITTI tracking's own layout (data/kitti_tracking.h) below
+// OUT/training: the same images and detector draws as samp's layout, a
+// calibration with all matrices (MakeKittiTrackingCalibration), the oxts of
+// the ego trajectory, the ground truth as label_02/<seq>.txt and the
+// detections as KITTI tracking lines (track id -1) in OUT/detections/<seq>.txt,
+// both in rectified camera 0 as KITTI's (moved by -t2 from the rendering
+// camera 2). No disparity, planes or ground-truth maps: KITTI has none.
+SynthSequenceInfo WriteKittiTrackingSequence(const SynthOptions& options, const Scene& scene, int sequence_index,
+                                             Progress* progress) {
+  const PinholeCamera camera = MakeCamera(options);
+  SynthSequenceInfo info;
+  char name[16];
+  std::snprintf(name, sizeof(name), "%04d", options.first_sequence + sequence_index);
+  info.name = name;
+  const KittiTrackingLayout layout((fs::path(options.output_folder) / "training").string(), info.name);
+  info.folder = layout.LeftImageFolder();
+  info.num_cars = int(scene.cars.size());
+  const uint64_t seed = Mix(options.seed, uint64_t(sequence_index));
+  StereoCalibration stereo;
+  stereo.camera = camera;
+  stereo.baseline = options.baseline;
+  const KittiTrackingCalibration calibration = MakeKittiTrackingCalibration(stereo);
+  const Eigen::Vector3d to_label_frame = -calibration.Camera2FromRectified0();
+  WriteKittiTrackingCalibration(layout.Calibration(), calibration);
+  WriteOxts(layout.Oxts(), OxtsFromCameraPoses(scene.world_from_camera, calibration, OxtsOrigin(), options.frame_rate_hz));
+  std::vector<ObjectLabel> gt_labels, detections;
+  StereoDetectorModel detector(options.detector, Mix(seed, 5000));
+  for (int t = 0; t < options.num_frames; ++t) {
+    const StereoView view = RenderStereo(options, scene, t, seed);
+    WriteImage(layout.LeftImage(t), view.left_image);
+    WriteImage(layout.RightImage(t), view.right_image);
+    const std::vector<int> visible = VisiblePixels(scene, view.left_buffers);
+    for (ObjectLabel d : DetectFrame(scene, t, camera, visible, &detector, &gt_labels, &info)) {
+      d.frame = t;
+      d.track_id = -1;
+      detections.push_back(MoveLabel(d, to_label_frame));
+    }
+    if (progress) progress->Tick();
+  }
+  for (ObjectLabel& label : gt_labels) label = MoveLabel(label, to_label_frame);
+  info.num_gt_labels = int(gt_labels.size());
+  WriteTrackingLabels(layout.Labels(), gt_labels);
+  WriteTrackingLabels((fs::path(options.output_folder) / "detections" / (info.name + ".txt")).string(), detections);
+  return info;
+}
+
 }  // namespace
 
 SynthSequenceInfo WriteSequence(const SynthOptions& options, const Scene& scene, int sequence_index,
                                 Progress* progress) {
+  if (options.layout == SynthLayout::kKittiTracking)
+    return WriteKittiTrackingSequence(options, scene, sequence_index, progress);
   const PinholeCamera camera = MakeCamera(options);
   SynthSequenceInfo info;
   char name[16];

@@ -125,6 +125,9 @@ void SynthOptions::Check() const {
       << "synth: first_sequence must be in [0, 999999 - num_sequences]";
   SAMP_CHECK(cars_per_sequence >= 1 && cars_per_sequence <= 20) << "synth: cars_per_sequence must be in [1, 20]";
   SAMP_CHECK(num_frames >= 1 && num_frames <= 100) << "synth: num_frames must be in [1, 100]";
+  SAMP_CHECK(layout == SynthLayout::kSamp || first_sequence + num_sequences <= 10000)
+      << "synth: the KITTI tracking layout names sequences with 4 digits: first_sequence + num_sequences "
+         "must be <= 10000";
   SAMP_CHECK(frame_rate_hz > 0) << "synth: frame_rate_hz must be > 0";
   SAMP_CHECK(width >= 32 && height >= 32) << "synth: image size must be at least 32 x 32";
   SAMP_CHECK(focal_px > 0 && baseline > 0) << "synth: focal_px and baseline must be > 0";
@@ -250,6 +253,7 @@ std::string SynthOptions::ToJson() const {
         {"false_positive_mean_run_frames", detector.false_positive_mean_run_frames},
         {"box_sigma_px", detector.box_sigma_px},
         {"min_pixels", detector.min_pixels}}}};
+  if (layout == SynthLayout::kKittiTracking) j["layout"] = "kitti-tracking";  // samp's: not written
   return DumpJson(j, 2);
 }
 

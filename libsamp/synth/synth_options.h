@@ -31,6 +31,12 @@ enum class DisparitySource {
 // "Street") or the clean scenes (`--preset clean`, docs/synthetic.md "Presets").
 enum class SynthScene { kStreet, kClean };
 
+// The folders a sequence is written in: samp's (the default; docs/sequence_format.md)
+// or KITTI tracking's own (`--layout kitti-tracking`: OUT/training/image_02|image_03/<seq>/,
+// calib/, oxts/, label_02/, and the detections in OUT/detections/<seq>.txt;
+// data/kitti_tracking.h). Sequence names: %06d in samp's, %04d in KITTI's.
+enum class SynthLayout { kSamp, kKittiTracking };
+
 struct SynthOptions {
   // Root folder; sequence i is written to <output_folder>/<seq>, seq = %06d of first_sequence + i.
   std::string output_folder;
@@ -99,6 +105,8 @@ struct SynthOptions {
   // Image noise: Gaussian, std. dev. in 8-bit grey levels, independent per pixel and camera
   // (the clean preset: 2).
   double image_noise_sigma = 0.7;
+
+  SynthLayout layout = SynthLayout::kSamp;
 
   DisparitySource disparity = DisparitySource::kStereoSgbm;
   // kTrueWithNoise: Gaussian disparity noise (px) on the background and on cars

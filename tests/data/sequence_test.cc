@@ -8,12 +8,16 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 #include <opencv2/imgcodecs.hpp>
 
 #include "libsamp/core/error.h"
 #include "tests/testing/expect_error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/data/detection_files.h"
 #include "libsamp/data/kitti_io.h"
+#include "libsamp/data/kitti_tracking.h"
 
 namespace samp {
 namespace {
@@ -357,6 +361,220 @@ std::string SharedKitti() {
   const char* env = std::getenv("SAMP_SHARED_DIR");
   const std::string shared = env != nullptr ? env : SAMP_SHARED_DIR;
   return shared + "/kitti/000046";
+}
+
+// The fixture's sequence in KITTI tracking's own layout: the images copied to
+// image_02/0007/<ffffff>.png, a calibration with all matrices (camera 2
+// 6 cm right of and 2.7 mm ahead of camera 0, KITTI's lever arms), oxts from
+// the ego poses, the detections as one AB3DMOT file in rectified camera 0.
+class KittiTrackingSequenceTest : public SequenceTest {
+ protected:
+  void SetUp() override {
+    SequenceTest::SetUp();
+    root_ = dir_.parent_path() / "training";
+    const KittiTrackingLayout layout(root_.string(), "0007");
+    folder_ = layout.LeftImageFolder();
+    fs::create_directories(layout.LeftImageFolder());
+    fs::create_directories(layout.RightImageFolder());
+    fs::create_directories(root_ / "calib");
+    fs::create_directories(root_ / "oxts");
+    const StereoCalibration small = SmallCalibration();
+    Eigen::Matrix3d k;
+    k << small.camera.fx, 0, small.camera.cx, 0, small.camera.fy, small.camera.cy, 0, 0, 1;
+    t2_ = Eigen::Vector3d(0.06, -0.0003, 0.0027);
+    const Eigen::Vector3d t[4] = {Eigen::Vector3d::Zero(), Eigen::Vector3d(-0.54, 0, 0), t2_,
+                                  t2_ - Eigen::Vector3d(small.baseline, 0, 0)};
+    for (int i = 0; i < 4; ++i) calibration_.p[i] << k, k * t[i];
+    calibration_.rect = Eigen::AngleAxisd(0.01, Eigen::Vector3d::UnitY()).toRotationMatrix();
+    calibration_.cam0_from_velo.linear() << 0, -1, 0, 0, 0, -1, 1, 0, 0;
+    calibration_.cam0_from_velo.translation() = Eigen::Vector3d(-0.004, -0.076, -0.272);
+    calibration_.velo_from_imu.translation() = Eigen::Vector3d(-0.81, 0.32, -0.8);
+    WriteKittiTrackingCalibration(layout.Calibration(), calibration_);
+    std::vector<Eigen::Isometry3d> poses;
+    std::vector<ObjectLabel> detections;
+    for (int t = 0; t < kFrames; ++t) {
+      poses.push_back(Ego(t));
+      fs::copy_file(dir_ / "image_2" / (Tag(t) + ".png"), layout.LeftImage(t));
+      fs::copy_file(dir_ / "image_3" / (Tag(t) + ".png"), layout.RightImage(t));
+      for (ObjectLabel label : ReadLabels((dir_ / "detections" / (Tag(t) + ".txt")).string())) {
+        label.frame = t;
+        detections.push_back(MoveLabel(label, -t2_));  // camera 2 -> rectified camera 0
+      }
+    }
+    WriteOxts(layout.Oxts(), OxtsFromCameraPoses(poses, calibration_, OxtsOrigin(), 10.0));
+    detections_ = (dir_.parent_path() / "detections" / "0007.txt").string();
+    fs::create_directories(fs::path(detections_).parent_path());
+    WriteAb3dmotDetections(detections_, detections);
+    // samp's layout without disparity/ and planes/: SGBM and RANSAC, as KITTI tracking.
+    fs::remove_all(dir_ / "disparity");
+    fs::remove_all(dir_ / "planes");
+  }
+  fs::path root_;
+  std::string folder_, detections_;
+  KittiTrackingCalibration calibration_;
+  Eigen::Vector3d t2_;
+};
+
+TEST_F(KittiTrackingSequenceTest, GivesTheTracksOfSampsLayout) {
+  SequenceOptions options;
+  options.stereo.num_disparities = 32;
+  SequenceSummary samp_summary, kitti_summary;
+  const std::vector<Track> samp = LoadSequenceTracks(dir_.string(), options, &samp_summary);
+  options.detections_path = detections_;
+  const SequenceFiles files = ListSequence(folder_);
+  EXPECT_EQ(files.layout, SequenceFiles::Layout::kKittiTracking);
+  EXPECT_EQ(files.name, "0007");
+  ASSERT_EQ(files.frames.size(), size_t(kFrames));
+  const std::vector<Track> kitti = LoadSequenceTracks(folder_, options, &kitti_summary);
+  EXPECT_EQ(kitti_summary.layout, "kitti-tracking");
+  EXPECT_TRUE(kitti_summary.poses_from_file);
+  EXPECT_EQ(kitti_summary.frames_with_computed_disparity, samp_summary.frames_with_computed_disparity);
+  EXPECT_EQ(kitti_summary.frames_with_estimated_plane, samp_summary.frames_with_estimated_plane);
+  ASSERT_EQ(kitti.size(), samp.size());
+  ASSERT_EQ(kitti.size(), 1u);
+  EXPECT_EQ(kitti[0].sequence, "0007");
+  EXPECT_NEAR(kitti[0].calibration.baseline, samp[0].calibration.baseline, 1e-12);
+  ASSERT_EQ(kitti[0].frames.size(), samp[0].frames.size());
+  for (size_t i = 0; i < samp[0].frames.size(); ++i) {
+    const TrackFrame &a = samp[0].frames[i], &b = kitti[0].frames[i];
+    SCOPED_TRACE("frame " + std::to_string(a.frame));
+    EXPECT_EQ(a.frame, b.frame);
+    // Camera 2 of frame 0 is the world of both; the oxts round trip (15
+    // significant digits: ~1e-8 m at KITTI's latitude) and
+    // AB3DMOT's 6 decimals are all that differs.
+    EXPECT_LT((a.world_from_camera.matrix() - b.world_from_camera.matrix()).cwiseAbs().maxCoeff(), 1e-7);
+    EXPECT_LT((a.detection.position - b.detection.position).norm(), 2e-6);
+    EXPECT_NEAR(a.detection.rotation_y, b.detection.rotation_y, 1e-6);
+    EXPECT_LT((a.ground_plane_in_world - b.ground_plane_in_world).norm(), 1e-6);
+    ASSERT_EQ(a.candidate_points_in_world.size(), b.candidate_points_in_world.size());
+    for (size_t k = 0; k < a.candidate_points_in_world.size(); ++k)
+      ASSERT_LT((a.candidate_points_in_world[k] - b.candidate_points_in_world[k]).norm(), 1e-6);
+  }
+  // Written labels go back to rectified camera 0.
+  EXPECT_LT((kitti_summary.label_frame_offset + t2_).norm(), 1e-12);
+  std::vector<ObjectLabel> labels = {kitti[0].frames[0].detection};
+  LabelsInLayoutFrame(kitti_summary, &labels);
+  EXPECT_LT((labels[0].position - (samp[0].frames[0].detection.position - t2_)).norm(), 2e-6);
+  std::vector<ObjectLabel> samp_labels = {samp[0].frames[0].detection};
+  LabelsInLayoutFrame(samp_summary, &samp_labels);
+  EXPECT_EQ(samp_labels[0].position, samp[0].frames[0].detection.position);
+
+  // The same detections as a KITTI tracking result file in a folder
+  // (<seq>.txt), and a frame range.
+  std::vector<ObjectLabel> tracking = ReadAb3dmotDetections(detections_);
+  for (ObjectLabel& label : tracking) label.track_id = 3;
+  const fs::path results = dir_.parent_path() / "results";
+  WriteTrackingLabels((results / "0007.txt").string(), tracking);
+  options.detections_path = results.string();
+  options.first_frame = 2;
+  options.last_frame = 4;
+  const std::vector<Track> ranged = LoadSequenceTracks(folder_, options, &kitti_summary);
+  ASSERT_EQ(ranged.size(), 1u);
+  ASSERT_EQ(ranged[0].frames.size(), 3u);
+  EXPECT_EQ(ranged[0].frames[0].frame, 2);
+  EXPECT_LT((ranged[0].frames[0].detection.position - samp[0].frames[1].detection.position).norm(), 2e-4);
+}
+
+TEST_F(KittiTrackingSequenceTest, BadInputNamesFileAndLine) {
+  SequenceOptions options;
+  options.stereo.num_disparities = 32;
+  // No detections given.
+  ExpectError([&] { LoadSequenceTracks(folder_, options); }, {"has no detections", "--detections"});
+  options.detections_path = detections_;
+  // Oxts shorter than the sequence.
+  const KittiTrackingLayout layout(root_.string(), "0007");
+  std::vector<Eigen::Isometry3d> poses = {Ego(0), Ego(1), Ego(2)};
+  WriteOxts(layout.Oxts(), OxtsFromCameraPoses(poses, calibration_, OxtsOrigin(), 10.0));
+  ExpectError([&] { LoadSequenceTracks(folder_, options); }, {"oxts/0007.txt:4: no GPS/IMU record for frame 3"});
+  fs::remove(layout.Oxts());
+  ExpectError([&] { LoadSequenceTracks(folder_, options); }, {"missing", "oxts/0007.txt"});
+  poses.push_back(Ego(3));
+  poses.push_back(Ego(4));
+  WriteOxts(layout.Oxts(), OxtsFromCameraPoses(poses, calibration_, OxtsOrigin(), 10.0));
+  // A detection line of 14 fields (the file has 9 good lines).
+  const std::vector<ObjectLabel> good = ReadAb3dmotDetections(detections_);
+  ASSERT_EQ(good.size(), 9u);
+  std::ofstream(detections_, std::ios::app) << "4,2,10,20,30,40,0.5,1.5,1.6,4,1,1.6,12,0.1\n";
+  ExpectError([&] { LoadSequenceTracks(folder_, options); }, {"0007.txt:10: 14 fields, expected 15"});
+  // A detection in a frame the sequence does not have.
+  std::vector<ObjectLabel> late = good;
+  late.back().frame = 9;
+  WriteAb3dmotDetections(detections_, late);
+  ExpectError([&] { LoadSequenceTracks(folder_, options); }, {"0007.txt: a detection in frame 9", "frames 0..4"});
+  WriteAb3dmotDetections(detections_, good);
+  EXPECT_EQ(LoadSequenceTracks(folder_, options).size(), 1u);
+  // A calibration without Tr_imu_velo.
+  KittiTrackingCalibration c = calibration_;
+  WriteKittiTrackingCalibration(layout.Calibration(), c);
+  std::ifstream in(layout.Calibration());
+  std::string text, line;
+  while (std::getline(in, line))
+    if (line.rfind("Tr_imu_velo", 0) != 0) text += line + "\n";
+  in.close();
+  std::ofstream(layout.Calibration()) << text;
+  ExpectError([&] { LoadSequenceTracks(folder_, options); }, {"calib/0007.txt: no Tr_imu_velo line"});
+}
+
+// The fixture's sequence in KITTI stereo 2015's (multiview) layout:
+// ROOT/image_2|image_3/000007_<ff>.png, ROOT/calib_cam_to_cam/000007.txt
+// (P_rect_02 with camera 2 6 cm right of camera 0, among other entries), the
+// detections as per-frame KITTI object files in rectified camera 0. Without
+// poses both are a static camera.
+TEST_F(SequenceTest, KittiStereoLayoutGivesTheTracksOfSampsLayout) {
+  const fs::path root = dir_.parent_path() / "stereo";
+  fs::create_directories(root / "calib_cam_to_cam");
+  fs::copy(dir_ / "image_2", root / "image_2");
+  fs::copy(dir_ / "image_3", root / "image_3");
+  const StereoCalibration c = SmallCalibration();
+  Eigen::Matrix3d k;
+  k << c.camera.fx, 0, c.camera.cx, 0, c.camera.fy, c.camera.cy, 0, 0, 1;
+  const Eigen::Vector3d t2(0.06, 0.0, 0.0027);
+  auto row = [&](const Eigen::Vector3d& t) {
+    Eigen::Matrix<double, 3, 4> p;
+    p << k, k * t;
+    std::ostringstream s;
+    s << std::setprecision(17);
+    for (int r = 0; r < 3; ++r)
+      for (int q = 0; q < 4; ++q) s << ' ' << p(r, q);
+    return s.str();
+  };
+  std::ofstream(root / "calib_cam_to_cam" / "000007.txt")
+      << "calib_time: 09-Jan-2012 13:57:47\ncorner_dist: 9.950000e-02\nS_02: 1.392000e+03 5.120000e+02\n"
+      << "P_rect_00:" << row(Eigen::Vector3d::Zero()) << "\nP_rect_01:" << row(Eigen::Vector3d(-0.54, 0, 0))
+      << "\nP_rect_02:" << row(t2) << "\nP_rect_03:" << row(t2 - Eigen::Vector3d(c.baseline, 0, 0)) << "\n";
+  for (int t = 0; t < kFrames; ++t) {
+    std::vector<ObjectLabel> moved;
+    for (const ObjectLabel& label : ReadLabels((dir_ / "detections" / (Tag(t) + ".txt")).string()))
+      moved.push_back(MoveLabel(label, -t2));
+    WriteLabels((root / "detections" / (Tag(t) + ".txt")).string(), moved);
+  }
+  fs::remove_all(dir_ / "disparity");
+  fs::remove_all(dir_ / "planes");
+  fs::remove_all(dir_ / "poses");
+  SequenceOptions options;
+  options.stereo.num_disparities = 32;
+  SequenceSummary samp_summary, stereo_summary;
+  const std::vector<Track> samp = LoadSequenceTracks(dir_.string(), options, &samp_summary);
+  const std::vector<std::string> sequences = KittiStereoSequences(root.string(), "7");
+  ASSERT_EQ(sequences.size(), 1u);
+  EXPECT_EQ(KittiStereoSequences(root.string(), "all"), sequences);
+  ExpectError([&] { LoadSequenceTracks(sequences[0], options); }, {"KITTI stereo sequence", "has no detections"});
+  options.detections_path = (root / "detections").string();
+  const std::vector<Track> stereo = LoadSequenceTracks(sequences[0], options, &stereo_summary);
+  EXPECT_EQ(stereo_summary.layout, "kitti-stereo");
+  EXPECT_EQ(stereo_summary.name, "000007");
+  EXPECT_FALSE(stereo_summary.poses_from_file);
+  EXPECT_LT((stereo_summary.label_frame_offset + t2).norm(), 1e-12);
+  ASSERT_EQ(stereo.size(), 1u);
+  ASSERT_EQ(stereo[0].frames.size(), samp[0].frames.size());
+  for (size_t i = 0; i < samp[0].frames.size(); ++i) {
+    const TrackFrame &a = samp[0].frames[i], &b = stereo[0].frames[i];
+    EXPECT_LT((a.detection.position - b.detection.position).norm(), 2e-4);  // 4 decimals, moved twice
+    ASSERT_EQ(a.candidate_points_in_world.size(), b.candidate_points_in_world.size());
+    for (size_t q = 0; q < a.candidate_points_in_world.size(); ++q)
+      ASSERT_LT((a.candidate_points_in_world[q] - b.candidate_points_in_world[q]).norm(), 1e-9);
+  }
+  ExpectError([&] { KittiStereoSequences(root.string(), "000008"); }, {"has no sequence 000008"});
 }
 
 TEST(RealKittiTest, ReadsFrame10) {

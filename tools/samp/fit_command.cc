@@ -1,11 +1,16 @@
 // `samp fit`: sequence directories -> fitted shape and trajectory of every
 // tracked car (docs/fitting.md).
+#include <filesystem>
 #include <iostream>
 #include <memory>
+#include <sstream>
+#include <string>
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/pipeline/run_fit.h"
+#include "libsamp/data/kitti_tracking.h"
+#include "libsamp/data/sequence.h"
 #include "libsamp/data/tracker_option_table.h"
 #include "libsamp/fit/fit_option_table.h"
 #include "libsamp/viz/fit_pictures.h"
@@ -17,10 +22,36 @@
 #endif
 
 namespace samp::tools {
+namespace {
+
+// "A-B" (or "A") -> first and last frame.
+void ParseFrameRange(const std::string& range, SequenceOptions* options) {
+  const size_t dash = range.find('-');
+  auto number = [&](const std::string& text) {
+    SAMP_CHECK(!text.empty() && text.size() <= 6 && text.find_first_not_of("0123456789") == std::string::npos)
+        << "--frames '" << range << "': expected FIRST-LAST frame numbers (e.g. 100-300)";
+    return std::stoi(text);
+  };
+  options->first_frame = number(range.substr(0, dash));
+  options->last_frame = dash == std::string::npos ? options->first_frame : number(range.substr(dash + 1));
+  SAMP_CHECK(options->first_frame <= options->last_frame) << "--frames '" << range << "': first after last";
+}
+
+// Where the inputs are, besides --seq: KITTI tracking sequences, frames, detections.
+struct InputSource {
+  std::string kitti_root;
+  std::string kitti_stereo_root;
+  std::string kitti_sequences = "all";
+  std::string frames;
+  std::string object_types;
+};
+
+}  // namespace
 
 void RegisterFitCommand(CLI::App* app) {
   auto options = std::make_shared<RunFitOptions>();
   auto visuals = std::make_shared<FitVisualsOptions>();
+  auto source = std::make_shared<InputSource>();
   visuals->pictures = visuals->html = false;
   RunFitOptions& o = *options;
   o.model_path = SAMP_DEFAULT_MODEL;
@@ -34,8 +65,41 @@ void RegisterFitCommand(CLI::App* app) {
   command->add_option("--model", o.model_path, "Shape model file (.vdb); default: the shipped model")
       ->capture_default_str();
   command->add_option("--seq", o.sequences,
-                      "Sequence directory (docs/sequence_format.md); repeat for a batch")
-      ->required();
+                      "Sequence directory (docs/sequence_format.md; samp's layout, a KITTI tracking "
+                      "ROOT/image_02/<seq> or a KITTI stereo ROOT/calib_cam_to_cam/<seq>.txt); repeat for a batch");
+  const std::string input_group = "Input (docs/sequence_format.md)";
+  command->add_option("--kitti-tracking", source->kitti_root,
+                      "KITTI tracking folder in its own layout (training/ or testing/: image_02, image_03, calib, "
+                      "oxts); ego poses from oxts/")
+      ->check(CLI::ExistingDirectory)
+      ->group(input_group);
+  command->add_option("--kitti-stereo", source->kitti_stereo_root,
+                      "KITTI stereo 2015 (multiview) folder in its own layout (image_2/<seq>_<ff>.png, image_3, "
+                      "calib_cam_to_cam/<seq>.txt); no ego poses: static camera")
+      ->check(CLI::ExistingDirectory)
+      ->group(input_group);
+  command->add_option("--sequence", source->kitti_sequences,
+                      "With --kitti-tracking or --kitti-stereo: sequences to fit, comma-separated (0004,0011; "
+                      "000046) or all")
+      ->capture_default_str()
+      ->group(input_group);
+  command->add_option("--frames", source->frames, "Fit only frames FIRST-LAST (e.g. 100-300) of each sequence")
+      ->group(input_group);
+  command->add_option("--detections", o.sequence.detections_path,
+                      "Detections instead of the layout's: a file (kitti-tracking or ab3dmot lines) for one "
+                      "sequence, or a folder with <seq>.txt per sequence or <seq>_<ff>.txt per frame (KITTI object)")
+      ->group(input_group);
+  command->add_option("--detection-format", o.sequence.detection_format,
+                      "Format of --detections: auto, kitti-object, kitti-tracking (frame id type ...; ids ignored), "
+                      "ab3dmot (frame,type,x1,y1,x2,y2,score,h,w,l,x,y,z,ry,alpha; type 2 = car)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "kitti-object", "kitti-tracking", "ab3dmot"}))
+      ->group(input_group);
+  command->add_option("--min-score", o.sequence.min_detection_score, "Ignore detections with a lower score")
+      ->group(input_group);
+  command->add_option("--types", source->object_types,
+                      "Object types used, comma-separated, case-insensitive (default Car)")
+      ->group(input_group);
   command->add_option("--out", o.output_dir,
                       "Output directory: written into a temporary folder beside it that replaces it as a "
                       "whole at the end; must be new, empty or an earlier samp fit output")
@@ -97,7 +161,30 @@ void RegisterFitCommand(CLI::App* app) {
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
   AddCommonOptions(command);
-  command->callback([options, visuals] {
+  command->callback([options, visuals, source, command] {
+    SAMP_CHECK(command->count("--sequence") == 0 || !source->kitti_root.empty() || !source->kitti_stereo_root.empty())
+        << "--sequence names sequences of --kitti-tracking or --kitti-stereo; give one of them (or --seq)";
+    if (!source->kitti_root.empty()) {
+      for (const std::string& folder : KittiTrackingSequenceFolders(source->kitti_root, source->kitti_sequences))
+        options->sequences.push_back(folder);
+    }
+    if (!source->kitti_stereo_root.empty()) {
+      for (const std::string& file : KittiStereoSequences(source->kitti_stereo_root, source->kitti_sequences))
+        options->sequences.push_back(file);
+    }
+    if (options->sequences.empty()) throw CLI::RequiredError("--seq, --kitti-tracking or --kitti-stereo");
+    if (!source->frames.empty()) ParseFrameRange(source->frames, &options->sequence);
+    if (!source->object_types.empty()) {
+      options->sequence.object_types.clear();
+      std::stringstream list(source->object_types);
+      for (std::string type; std::getline(list, type, ',');)
+        if (!type.empty()) options->sequence.object_types.push_back(type);
+    }
+    std::error_code error;
+    SAMP_CHECK(options->sequence.detections_path.empty() || options->sequences.size() == 1 ||
+               std::filesystem::is_directory(options->sequence.detections_path, error))
+        << "--detections " << options->sequence.detections_path << " is a file, but " << options->sequences.size()
+        << " sequences are fitted: give a folder with <seq>.txt per sequence";
     SAMP_CHECK(options->link_only || !options->model_path.empty())
         << "no --model given and this build has no default model";
     SAMP_CHECK(!(options->link_only && (visuals->pictures || visuals->html)))

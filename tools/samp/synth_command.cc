@@ -51,6 +51,7 @@ void RegisterSynthCommand(CLI::App* app) {
     SynthCarSource cars;
     std::string disparity = "sgbm";
     std::string preset = "street";
+    std::string layout = "samp";
     bool no_shadows = false;
     std::unique_ptr<SynthOptionTable> table;
   };
@@ -202,6 +203,12 @@ void RegisterSynthCommand(CLI::App* app) {
                       "(true disparity + the documented noise model, fast)")
       ->capture_default_str()
       ->check(CLI::IsMember({"sgbm", "true"}));
+  command->add_option("--layout", args->layout,
+                      "Folders written: 'samp' (OUT/<seq>/, the default) or 'kitti-tracking' (KITTI tracking's "
+                      "own: OUT/training/image_02|image_03/<seq>/, calib/, oxts/, label_02/, and the detections "
+                      "OUT/detections/<seq>.txt; docs/sequence_format.md)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"samp", "kitti-tracking"}));
   t.Add<double>("--disparity-noise", [](O& o) -> double& { return o.disparity_sigma_px; },
                 "'true' mode: disparity noise std. dev. on the background, px");
   t.Add<double>("--car-disparity-noise", [](O& o) -> double& { return o.car_disparity_sigma_px; },
@@ -258,6 +265,7 @@ void RegisterSynthCommand(CLI::App* app) {
     options.disparity =
         args->disparity == "true" ? DisparitySource::kTrueWithNoise : DisparitySource::kStereoSgbm;
     if (args->no_shadows) options.shadows = false;
+    if (args->layout == "kitti-tracking") options.layout = SynthLayout::kKittiTracking;
     options.show_progress = GetLogLevel() <= LogLevel::kInfo;
     (void)command;
     const std::vector<SynthCar> cars = LoadSynthCars(args->cars);
