@@ -7,7 +7,7 @@
 #      detector's errors; docs/synthetic.md),
 #   3. fit every sequence with the full method (`samp fit` defaults: joint shape and motion,
 #      ray-depth data term, mixture robustifier, effective weighting), the paper's energy
-#      (--data-term paper --weighting mean --huber-loss --detection-size-sigma 0 --no-detection-position --shared-points) and --single-frame,
+#      (--data-term paper --data-weighting mean --huber-loss --detection-size-sigma 0 --no-detection-position --shared-points) and --single-frame,
 #   4. evaluate against the ground truth with the raw-stereo and input-detection baselines.
 #
 # Usage: tools/run_benchmark.sh [options]
@@ -28,6 +28,15 @@
 #   --parked-cars P       parked cars per sequence (street preset; default 3)
 #   --seeds "S1 S2 ..."   synthesis seeds (default "2017 7 11"; the first one's tables are shown in full)
 #   --clean-comparison    also run the clean preset on the first seed (the comparison table)
+#   --profiles "P1 P2 ..." instead of the runs above: the street preset once per synthetic detector
+#                         profile (samp synth --detector-profile; docs/synthetic.md "Detector profiles":
+#                         default lidar stereo-x2 size-x3 kitti-boxes flips) and seed, each fitted with
+#                         samp fit's DEFAULT flags (no tracker or detector flags: self-calibration) and
+#                         with --detector-model = the profile's true noise model (SEQ/gt/detector_model.json),
+#                         evaluated with the raw-stereo and detection baselines; the table "Across
+#                         detectors" (tracks per car, main track, output on the car-frames with a
+#                         detection, F1 per track) goes to WORK/profiles.md, and with --docs into
+#                         docs/results.md. Runs: WORK/prof_<P>_<S>/{sequences,fit_full,fit_true,eval}
 #   --threads T           worker threads (default 2)
 #   --docs                also write docs/results.md and docs/images/benchmark_*.png
 #   --retrain             train the model even when WORK/model_holdout.vdb is up to date
@@ -39,7 +48,7 @@
 #
 # Every step logs its command and duration to WORK/benchmark.log. Outputs:
 #   WORK/model_holdout.vdb and per run (seed_<S>, clean_<S>) WORK/<run>/sequences/<seq>/,
-#   fit_full/, fit_full_paper/, fit_single/, eval/.
+#   fit_full/, fit_full_paper/, fit_single/, eval/ (with --profiles: see there).
 set -euo pipefail
 
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -54,6 +63,7 @@ cars_per_sequence=3
 parked_cars=3
 seeds="2017 7 11"
 clean_comparison=0
+profiles=""
 threads=2
 write_docs=0
 retrain=0
@@ -78,6 +88,7 @@ while [ $# -gt 0 ]; do
     --parked-cars) parked_cars="$2"; shift 2 ;;
     --seeds) seeds="$2"; shift 2 ;;
     --clean-comparison) clean_comparison=1; shift ;;
+    --profiles) profiles="$2"; shift 2 ;;
     --threads) threads="$2"; shift 2 ;;
     --docs) write_docs=1; shift ;;
     --retrain) retrain=1; shift ;;
@@ -219,13 +230,67 @@ run_one() {  # run_one NAME PRESET SEED
   for seq in "$dir"/sequences/[0-9][0-9][0-9][0-9][0-9][0-9]; do seq_args+=(--seq "$seq"); done
   step "$name/fit_full" "$samp" fit --model "$model" "${seq_args[@]}" "${fit_extra[@]}" --out "$dir/fit_full" --threads "$threads" -q
   step "$name/fit_full_paper" "$samp" fit --model "$model" "${seq_args[@]}" "${fit_extra[@]}" \
-    --data-term paper --weighting mean --huber-loss --detection-size-sigma 0 --no-detection-position --shared-points --out "$dir/fit_full_paper" --threads "$threads" -q
+    --data-term paper --data-weighting mean --huber-loss --detection-size-sigma 0 --no-detection-position --shared-points --out "$dir/fit_full_paper" --threads "$threads" -q
   step "$name/fit_single" "$samp" fit --model "$model" "${seq_args[@]}" "${fit_extra[@]}" --single-frame \
     --out "$dir/fit_single" --threads "$threads" -q
   step "$name/eval" "$samp" eval "${seq_args[@]}" --result "full=$dir/fit_full" \
     --result "full-paper=$dir/fit_full_paper" --result "single-frame=$dir/fit_single" \
     --out "$dir/eval" --threads "$threads" --pictures -q
 }
+# Across detectors (--profiles): per profile and seed, synth with the profile's detector, fit with the
+# defaults and with the true noise model, evaluate.
+run_profile() {  # run_profile NAME PROFILE SEED
+  local name="$1" profile="$2" run_seed="$3"
+  local dir="$work/$name"
+  if [ "$reuse_runs" = 1 ] && [ -f "$dir/eval/results.json" ]; then
+    echo "run_benchmark: $name: reusing the whole run in $dir" | tee -a "$log"
+    return 0
+  fi
+  if [ "$reuse_sequences" = 1 ] && [ -f "$dir/sequences/config.json" ]; then
+    echo "run_benchmark: $name: reusing $dir/sequences" | tee -a "$log"
+    rm -rf "$dir/fit_full" "$dir/fit_true" "$dir/eval"
+  else
+    rm -rf "$dir"
+    mkdir -p "$dir"
+    step "$name/synth" "$samp" synth --cad "$cad" --manifest "$synth_manifest" "${car_args[@]}" \
+      --preset street --detector-profile "$profile" --sequences "$sequences" \
+      --cars-per-sequence "$cars_per_sequence" --parked-cars "$parked_cars" --seed "$run_seed" \
+      --disparity sgbm -o "$dir/sequences"
+  fi
+  local seq_args=()
+  local seq first_seq=""
+  for seq in "$dir"/sequences/[0-9][0-9][0-9][0-9][0-9][0-9]; do
+    seq_args+=(--seq "$seq")
+    [ -n "$first_seq" ] || first_seq="$seq"
+  done
+  local true_model="$first_seq/gt/detector_model.json"
+  [ -f "$true_model" ] || die "$true_model not found (a samp synth without detector models?)"
+  step "$name/fit_full" "$samp" fit --model "$model" "${seq_args[@]}" --out "$dir/fit_full" --threads "$threads" -q
+  step "$name/fit_true" "$samp" fit --model "$model" "${seq_args[@]}" --detector-model "$true_model" \
+    --out "$dir/fit_true" --threads "$threads" -q
+  step "$name/eval" "$samp" eval "${seq_args[@]}" --result "full=$dir/fit_full" \
+    --result "true-model=$dir/fit_true" --out "$dir/eval" --threads "$threads" -q
+}
+if [ -n "$profiles" ]; then
+  profile_runs=()
+  for s in $seeds; do
+    for p in $profiles; do
+      run_profile "prof_${p}_$s" "$p" "$s"
+      profile_runs+=("prof_${p}_$s")
+    done
+  done
+  total=$(awk '{s += $2} END {print s + 0}' "$work/timings.txt")
+  echo "run_benchmark: total $total s" | tee -a "$log"
+  docs_args=()
+  [ "$write_docs" = 1 ] && docs_args=(--results "$root/docs/results.md")
+  python3 "$root/tools/benchmark_report.py" profiles --work "$work" --profiles "$profiles" --seeds "$seeds" \
+    --sequences "$sequences" --cars "$cars_per_sequence" --parked "$parked_cars" --threads "$threads" \
+    --total "$total" --cores "$(nproc)" --out "$work/profiles.md" "${docs_args[@]}"
+  cat "$work/profiles.md"
+  [ "$write_docs" = 1 ] && echo "run_benchmark: wrote the section \"Across detectors\" of $root/docs/results.md"
+  exit 0
+fi
+
 runs=()
 for s in $seeds; do
   run_one "seed_$s" "$preset" "$s"

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <tuple>
 
 #include "libsamp/core/error.h"
@@ -45,6 +46,13 @@ void DetectorModelOptions::Check() const {
   non_negative(vertical_sigma, "vertical_sigma");
   non_negative(size_sigma, "size_sigma");
   non_negative(relative_size_sigma, "relative_size_sigma");
+  auto finite = [](double value, const char* name) {
+    SAMP_CHECK(std::isfinite(value)) << "detector model: " << name << " must be finite (is " << value << ")";
+  };
+  finite(height_bias, "height_bias");
+  finite(width_bias, "width_bias");
+  finite(length_bias, "length_bias");
+  finite(along_ray_bias, "along_ray_bias");
   non_negative(yaw_sigma_deg_a, "yaw_sigma_deg_a");
   non_negative(yaw_sigma_deg_b, "yaw_sigma_deg_b");
   non_negative(correlation_frames, "correlation_frames");
@@ -129,7 +137,7 @@ bool StereoDetectorModel::Detect(int track_id, int frame, const ObjectLabel& tru
   const Eigen::Vector3d ray = Eigen::Vector3d(p.x(), 0.0, p.z()).normalized();
   const Eigen::Vector3d lateral(ray.z(), 0.0, -ray.x());
   DetectionError e;
-  e.along_ray = (options_.ray_sigma_a + options_.ray_sigma_b * d + options_.ray_sigma_c * d * d) * s.ar[0];
+  e.along_ray = options_.along_ray_bias + (options_.ray_sigma_a + options_.ray_sigma_b * d + options_.ray_sigma_c * d * d) * s.ar[0];
   e.lateral = (options_.lateral_sigma_a + options_.lateral_sigma_b * d) * s.ar[1];
   e.vertical = options_.vertical_sigma * s.ar[2];
   e.yaw_rad = (options_.yaw_sigma_deg_a + options_.yaw_sigma_deg_b * d) * kPi / 180.0 * s.ar[6];
@@ -142,12 +150,13 @@ bool StereoDetectorModel::Detect(int track_id, int frame, const ObjectLabel& tru
   det.position = p + e.along_ray * ray + e.lateral * lateral + Eigen::Vector3d(0.0, e.vertical, 0.0);
   det.position.z() = std::max(det.position.z(), 0.5);  // never behind the camera (documented)
   det.rotation_y = WrapAngle(truth.rotation_y + e.yaw_rad + (e.flipped ? kPi : 0.0));
-  auto noisy_size = [&](double size, double standard) {
-    return std::max(0.5 * size, size + (options_.size_sigma + options_.relative_size_sigma * size) * standard);
+  auto noisy_size = [&](double size, double bias, double standard) {
+    return std::max(0.5 * size,
+                    size + bias + (options_.size_sigma + options_.relative_size_sigma * size) * standard);
   };
-  det.height = noisy_size(truth.height, s.ar[3]);
-  det.width = noisy_size(truth.width, s.ar[4]);
-  det.length = noisy_size(truth.length, s.ar[5]);
+  det.height = noisy_size(truth.height, options_.height_bias, s.ar[3]);
+  det.width = noisy_size(truth.width, options_.width_bias, s.ar[4]);
+  det.length = noisy_size(truth.length, options_.length_bias, s.ar[5]);
   Eigen::Vector4d b = truth.box_2d;
   for (int i = 0; i < 4; ++i) b[i] += options_.box_sigma_px * box_noise[i];
   b[0] = std::clamp(b[0], 0.0, camera.width - 2.0);
@@ -160,6 +169,111 @@ bool StereoDetectorModel::Detect(int track_id, int frame, const ObjectLabel& tru
   if (s.missed || visible_pixels < options_.min_pixels) return false;
   *detection = det;
   return true;
+}
+
+const std::vector<std::string>& DetectorProfileNames() {
+  static const std::vector<std::string> names = {"default", "lidar", "stereo-x2", "size-x3", "kitti-boxes", "flips"};
+  return names;
+}
+
+DetectorModelOptions DetectorProfile(const std::string& name) {
+  DetectorModelOptions o;
+  // Position, size and yaw sigmas times `factor` (rates, correlation and the 2D box stay).
+  auto scale_sigmas = [&o](double factor) {
+    for (double* v : {&o.ray_sigma_a, &o.ray_sigma_b, &o.ray_sigma_c, &o.lateral_sigma_a, &o.lateral_sigma_b,
+                      &o.vertical_sigma, &o.size_sigma, &o.relative_size_sigma, &o.yaw_sigma_deg_a,
+                      &o.yaw_sigma_deg_b})
+      *v *= factor;
+  };
+  if (name == "default") {
+  } else if (name == "lidar") {
+    scale_sigmas(0.25);
+  } else if (name == "stereo-x2") {
+    scale_sigmas(2.0);
+  } else if (name == "size-x3") {
+    o.size_sigma *= 3.0;
+    o.relative_size_sigma *= 3.0;
+  } else if (name == "kitti-boxes") {
+    o.width_bias = -0.25;      // KITTI's boxes exclude the mirrors (0.2-0.3 m of a CAD car's width)
+    o.along_ray_bias = -0.2;   // boxes placed on the visible surface: nearer than the true centre
+  } else if (name == "flips") {
+    o.flip_probability = 0.08;
+    o.flip_mean_run_frames = 1.0;  // every flip lasts one frame: 5x the default's flip events
+  } else {
+    std::ostringstream known;
+    for (const std::string& n : DetectorProfileNames()) known << (known.tellp() > 0 ? ", " : "") << n;
+    SAMP_THROW() << "detector model: unknown profile '" << name << "' (known: " << known.str() << ")";
+  }
+  o.profile = name;
+  return o;
+}
+
+DetectorNoiseModel TrueDetectorNoiseModel(const DetectorModelOptions& o, double min_distance, double max_distance) {
+  o.Check();
+  SAMP_CHECK(std::isfinite(min_distance) && std::isfinite(max_distance) && min_distance >= 0.0 &&
+             max_distance > min_distance)
+      << "detector model: true noise model needs 0 <= min_distance < max_distance (are " << min_distance << ", "
+      << max_distance << ")";
+  DetectorNoiseModel m;
+  m.source = o.profile.empty() ? "synthetic detector" : "synthetic detector, profile " + o.profile;
+  std::ostringstream range;
+  range << min_distance << "-" << max_distance << " m";
+  m.notes.push_back("the generating noise of the synthetic detector for cars at " + range.str() +
+                    " (no samples; sample counts are 0)");
+  // The format's sigmas must be > 0: a zero sigma becomes 1 mm, with a note.
+  auto positive = [&m](double value, const char* name) {
+    if (value >= 1e-3) return value;
+    m.notes.push_back(std::string(name) + ": " + std::to_string(value) + " m raised to 0.001 (the format needs > 0)");
+    return 1e-3;
+  };
+  // Least-squares line of d^2 over [d0, d1]: d^2 ~ 2 m d - m^2 + h^2 / 3 (m the centre, h the half width).
+  const double centre = 0.5 * (min_distance + max_distance), half = 0.5 * (max_distance - min_distance);
+  m.along_sigma_a = o.ray_sigma_a + o.ray_sigma_c * (half * half / 3.0 - centre * centre);
+  m.along_sigma_b = o.ray_sigma_b + o.ray_sigma_c * 2.0 * centre;
+  if (o.ray_sigma_c != 0.0) {
+    std::ostringstream note;
+    note << "along the ray: a + b d + c d^2 (c " << o.ray_sigma_c << ") as its least-squares line over " << range.str();
+    constexpr double kMinA = 0.01;  // as the estimators' a >= 0.01 m
+    if (m.along_sigma_a < kMinA) {  // the least-squares slope through a = 0.01 m
+      const double d0 = min_distance, d1 = max_distance;
+      const double moment = (o.ray_sigma_a - kMinA) * (d1 * d1 - d0 * d0) / 2.0 +
+                            o.ray_sigma_b * (d1 * d1 * d1 - d0 * d0 * d0) / 3.0 +
+                            o.ray_sigma_c * (d1 * d1 * d1 * d1 - d0 * d0 * d0 * d0) / 4.0;
+      m.along_sigma_a = kMinA;
+      m.along_sigma_b = std::max(0.0, moment / ((d1 * d1 * d1 - d0 * d0 * d0) / 3.0));
+      note << " through a = " << kMinA << " m";
+    }
+    m.notes.push_back(note.str());
+  }
+  m.along_sigma_a = positive(m.along_sigma_a, "along_sigma_a");
+  m.across_sigma_a = positive(o.lateral_sigma_a, "across_sigma_a");
+  m.across_sigma_b = o.lateral_sigma_b;
+  m.vertical_sigma_a = positive(o.vertical_sigma, "vertical_sigma_a");
+  m.vertical_sigma_b = 0.0;
+  m.along_bias = o.along_ray_bias;
+  const double typical_size[3] = {1.5, 1.8, 4.3};
+  const double bias[3] = {o.height_bias, o.width_bias, o.length_bias};
+  for (int i = 0; i < 3; ++i) {
+    m.size_sigma[i] = positive(o.size_sigma + o.relative_size_sigma * typical_size[i], "size.sigma");
+    m.size_bias[i] = bias[i];
+  }
+  if (o.relative_size_sigma != 0.0)
+    m.notes.push_back("size: the relative sigma taken at a box of h 1.5, w 1.8, l 4.3 m");
+  // Root mean square of a + b d over [d0, d1].
+  const double a = o.yaw_sigma_deg_a, b = o.yaw_sigma_deg_b;
+  m.yaw_sigma_deg = std::max(0.01, std::sqrt(a * a + 2 * a * b * centre + b * b * (centre * centre + half * half / 3.0)));
+  if (b != 0.0) m.notes.push_back("yaw: a + b d as its root mean square over " + range.str());
+  if (o.correlation_frames > 0.0) {
+    std::ostringstream note;
+    note << "the errors are correlated in time (AR(1), tau " << o.correlation_frames
+         << " frames); the format assumes white noise";
+    m.notes.push_back(note.str());
+  }
+  m.flip_rate = o.flip_probability;
+  m.miss_rate = o.miss_probability;
+  m.false_positives_per_frame = o.false_positives_per_frame;
+  m.biases_estimated = true;
+  return m;
 }
 
 bool ProjectBox(const ObjectLabel& label, const PinholeCamera& camera, Eigen::Vector4d* box_2d) {

@@ -20,11 +20,15 @@
 #include <vector>
 
 #include "libsamp/core/camera.h"
+#include "libsamp/data/detector_noise.h"
 #include "libsamp/data/track.h"
 
 namespace samp {
 
 struct DetectorModelOptions {
+  // The named profile these options came from (DetectorProfile; "" = the
+  // preset's own detector). Only a record: the fields below are what is drawn.
+  std::string profile;
   // Std. dev. of the position error along the horizontal viewing ray,
   // a + b d + c d^2 metres at distance d (defaults: 0.29 m at 10 m, 0.73 m at 45 m).
   double ray_sigma_a = 0.16, ray_sigma_b = 0.013, ray_sigma_c = 0.0;
@@ -35,6 +39,13 @@ struct DetectorModelOptions {
   // Std. dev. of each box dimension h, w, l: size_sigma metres + relative_size_sigma x the true size.
   double size_sigma = 0.3;
   double relative_size_sigma = 0.0;
+  // Systematic error of each box dimension, detected - true, metres (e.g.
+  // KITTI-convention boxes exclude the mirrors: width 0.2-0.3 m narrower than
+  // the CAD extent). Added before the noise.
+  double height_bias = 0.0, width_bias = 0.0, length_bias = 0.0;
+  // Systematic error of the bottom centre along the horizontal viewing ray,
+  // metres (+ = farther than the truth). Added to the noise along the ray.
+  double along_ray_bias = 0.0;
   // Std. dev. of the yaw error, a + b d degrees.
   double yaw_sigma_deg_a = 3.0, yaw_sigma_deg_b = 0.05;
   // Share of detections turned by 180 degrees and its mean run length in frames
@@ -61,7 +72,7 @@ struct DetectorModelOptions {
 
 // The errors of one detection relative to its true box (for tests and diagnostics).
 struct DetectionError {
-  double along_ray = 0.0, lateral = 0.0, vertical = 0.0;  // metres
+  double along_ray = 0.0, lateral = 0.0, vertical = 0.0;  // metres (along_ray includes along_ray_bias)
   double yaw_rad = 0.0;                                    // without the flip
   bool flipped = false;
 };
@@ -111,6 +122,35 @@ class StereoDetectorModel {
   std::mt19937_64 clutter_engine_;
   std::vector<FalsePositiveState> alive_;
 };
+
+// Named detector profiles (docs/synthetic.md, "Detector profiles"), each a
+// DetectorModelOptions with `profile` set to its name:
+//   default      the stereo detector above (DetectorModelOptions(); the same draws)
+//   lidar        position, size and yaw sigmas x 0.25 (a LiDAR-grade detector)
+//   stereo-x2    position, size and yaw sigmas x 2
+//   size-x3      box size sigmas x 3
+//   kitti-boxes  KITTI-convention boxes: width 0.25 m narrower than the CAD
+//                extent (mirrors excluded), bottom centre 0.2 m nearer along the ray
+//   flips        8 % of the detections turned by 180 degrees, each flip one frame long
+// Throws samp::Error naming the profile and listing the known ones.
+DetectorModelOptions DetectorProfile(const std::string& name);
+const std::vector<std::string>& DetectorProfileNames();
+
+// The true noise model of a synthetic detector in the format of the
+// self-calibration and `samp calibrate-detector` (data/detector_noise.h), so
+// that a fit can be given it (`samp fit --detector-model`). The format's
+// position sigmas are a + b d in the horizontal distance, its yaw sigma one
+// number and its errors white; where the options are richer the conversion
+// approximates over cars at [min_distance, max_distance] m and says so in the
+// model's notes: the along-ray term's c d^2 by the least-squares line, the yaw
+// sigma a + b d by its root mean square, a relative size sigma at a typical car
+// box (h 1.5, w 1.8, l 4.3 m); the vertical sigma is constant (b = 0). Biases
+// are the options' (biases_estimated = true); flip, miss and false-positive
+// rates are the options' stationary shares. Sample counts are 0 (no samples:
+// the values are the generating ones). Throws samp::Error on invalid options
+// or distances.
+DetectorNoiseModel TrueDetectorNoiseModel(const DetectorModelOptions& options, double min_distance,
+                                          double max_distance);
 
 // The 2D box of a 3D box label (projected corners, clipped to the image); false
 // when no corner lies in front of the camera or the box misses the image.

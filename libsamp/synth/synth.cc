@@ -14,6 +14,7 @@
 #include "libsamp/core/log.h"
 #include "libsamp/core/progress.h"
 #include "libsamp/core/util.h"
+#include "libsamp/data/detector_noise.h"
 #include "libsamp/scan/canonical.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/synth/scene.h"
@@ -254,6 +255,13 @@ std::string SynthOptions::ToJson() const {
         {"box_sigma_px", detector.box_sigma_px},
         {"min_pixels", detector.min_pixels}}}};
   if (layout == SynthLayout::kKittiTracking) j["layout"] = "kitti-tracking";  // samp's: not written
+  // Written only when set, so that the files of the preset's own detector stay as they were.
+  nlohmann::json& d = j["detector"];
+  if (!detector.profile.empty()) d["profile"] = detector.profile;
+  if (detector.height_bias != 0.0) d["height_bias"] = detector.height_bias;
+  if (detector.width_bias != 0.0) d["width_bias"] = detector.width_bias;
+  if (detector.length_bias != 0.0) d["length_bias"] = detector.length_bias;
+  if (detector.along_ray_bias != 0.0) d["along_ray_bias"] = detector.along_ray_bias;
   return DumpJson(j, 2);
 }
 
@@ -293,6 +301,10 @@ std::vector<Eigen::Vector4d> SynthTrajectory(const Eigen::Vector4d& origin_pose,
   return poses;
 }
 
+std::string SynthDetectorModelPath(const SequenceLayout& layout) {
+  return (fs::path(layout.GroundTruthFolder()) / "detector_model.json").string();
+}
+
 SynthSummary SynthesizeSequences(const SynthOptions& options, const std::vector<SynthCar>& cars) {
   options.Check();
   SAMP_CHECK(!cars.empty()) << "synth: no cars given";
@@ -309,6 +321,8 @@ SynthSummary SynthesizeSequences(const SynthOptions& options, const std::vector<
   config["cars"] = names;
   WriteTextFileAtomically((fs::path(options.output_folder) / "config.json").string(), DumpJson(config, 2) + "\n");
 
+  const DetectorNoiseModel true_model =
+      TrueDetectorNoiseModel(options.detector, options.min_distance, options.max_distance);
   SynthSummary summary;
   Progress progress("synth frames", int64_t(options.num_sequences) * options.num_frames,
                     options.show_progress);
@@ -316,6 +330,9 @@ SynthSummary SynthesizeSequences(const SynthOptions& options, const std::vector<
   for (int i = 0; i < options.num_sequences; ++i) {
     const synth::Scene scene = synth::MakeScene(options, cars, i, &global_car_index);
     summary.sequences.push_back(synth::WriteSequence(options, scene, i, &progress));
+    // The detector's true noise model beside the ground truth (`samp fit --detector-model`).
+    const SequenceLayout layout(summary.sequences.back().folder, summary.sequences.back().name);
+    WriteDetectorNoiseModel(SynthDetectorModelPath(layout), true_model);
     for (const SceneCar& car : scene.cars) {
       ++summary.num_tracks;
       if (car.motion == MotionType::kStanding) ++summary.num_standing;

@@ -8,7 +8,8 @@
 //
 // The output is exactly the sequence layout `samp fit` reads:
 //   SEQ/calib/<seq>.txt, image_2/, image_3/, disparity/, detections/, planes/, poses/<seq>.txt
-// plus the ground truth in SEQ/gt/ (label_02/<seq>.txt, depth/, obj_map/, meshes/, cars.json).
+// plus the ground truth in SEQ/gt/ (label_02/<seq>.txt, depth/, obj_map/, meshes/, cars.json,
+// detector_model.json: the detector's true noise model, TrueDetectorNoiseModel).
 // Everything is a function of the options (seed included): same options, same bytes.
 #pragma once
 
@@ -17,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "libsamp/data/sequence_layout.h"
 #include "libsamp/synth/synth_options.h"
 
 namespace samp {
@@ -60,6 +62,11 @@ struct SynthSummary {
 // SynthesizeSequences places every car and the ego camera this way.
 std::vector<Eigen::Vector4d> SynthTrajectory(const Eigen::Vector4d& origin_pose, double speed, double yaw_rate,
                                              int num_frames, int origin_frame, double frame_rate_hz);
+
+// SEQ/gt/detector_model.json: the synthetic detector's true noise model
+// (TrueDetectorNoiseModel over the cars' distance range), in the format of
+// data/detector_noise.h, for `samp fit --detector-model`.
+std::string SynthDetectorModelPath(const SequenceLayout& layout);
 
 // Writes options.num_sequences sequences from `cars` (at least one). Every file
 // is written atomically; config.json with the effective options goes to the root.

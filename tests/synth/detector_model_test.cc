@@ -1,14 +1,20 @@
 // The stereo detector model on its own: its error statistics match its
 // parameters (medians per distance band, vertical and size spreads, flip and
 // miss rates within sampling error, temporal correlation), false positives on
-// clutter at the requested rate, determinism by seed.
+// clutter at the requested rate, determinism by seed; the named profiles and
+// the true noise model written for `samp fit --detector-model`.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "libsamp/core/error.h"
+#include "libsamp/data/detector_noise.h"
 #include "libsamp/synth/detector_model.h"
 
 namespace samp {
@@ -209,6 +215,215 @@ TEST(DetectorModel, RejectsBadOptions) {
   options = DetectorModelOptions();
   options.vertical_sigma = -0.1;
   EXPECT_THROW(StereoDetectorModel(options, 1), Error);
+}
+
+// Every field of the options, by name (the profiles' changes are checked against it).
+std::vector<std::pair<std::string, double>> Fields(const DetectorModelOptions& o) {
+  return {{"ray_sigma_a", o.ray_sigma_a},
+          {"ray_sigma_b", o.ray_sigma_b},
+          {"ray_sigma_c", o.ray_sigma_c},
+          {"lateral_sigma_a", o.lateral_sigma_a},
+          {"lateral_sigma_b", o.lateral_sigma_b},
+          {"vertical_sigma", o.vertical_sigma},
+          {"size_sigma", o.size_sigma},
+          {"relative_size_sigma", o.relative_size_sigma},
+          {"height_bias", o.height_bias},
+          {"width_bias", o.width_bias},
+          {"length_bias", o.length_bias},
+          {"along_ray_bias", o.along_ray_bias},
+          {"yaw_sigma_deg_a", o.yaw_sigma_deg_a},
+          {"yaw_sigma_deg_b", o.yaw_sigma_deg_b},
+          {"flip_probability", o.flip_probability},
+          {"flip_mean_run_frames", o.flip_mean_run_frames},
+          {"miss_probability", o.miss_probability},
+          {"miss_mean_run_frames", o.miss_mean_run_frames},
+          {"correlation_frames", o.correlation_frames},
+          {"false_positives_per_frame", o.false_positives_per_frame},
+          {"false_positive_mean_run_frames", o.false_positive_mean_run_frames},
+          {"box_sigma_px", o.box_sigma_px},
+          {"min_pixels", double(o.min_pixels)}};
+}
+
+// The fields of `profile` that differ from the defaults, with their factor
+// (value / default; the value itself when the default is 0).
+std::map<std::string, double> Changes(const DetectorModelOptions& profile) {
+  const auto base = Fields(DetectorModelOptions()), changed = Fields(profile);
+  std::map<std::string, double> out;
+  for (size_t i = 0; i < base.size(); ++i) {
+    if (changed[i].second == base[i].second) continue;
+    out[base[i].first] = base[i].second != 0.0 ? changed[i].second / base[i].second : changed[i].second;
+  }
+  return out;
+}
+
+TEST(DetectorProfiles, SetTheFieldsTheyClaim) {
+  EXPECT_EQ(DetectorProfileNames(),
+            (std::vector<std::string>{"default", "lidar", "stereo-x2", "size-x3", "kitti-boxes", "flips"}));
+  for (const std::string& name : DetectorProfileNames()) {
+    EXPECT_EQ(DetectorProfile(name).profile, name);
+    EXPECT_NO_THROW(DetectorProfile(name).Check()) << name;
+  }
+  EXPECT_TRUE(Changes(DetectorProfile("default")).empty());
+  EXPECT_TRUE(DetectorModelOptions().profile.empty());
+  // Position, size and yaw sigmas scaled (c and the relative size sigma are 0 by default).
+  const std::vector<std::string> sigmas = {"ray_sigma_a", "ray_sigma_b", "lateral_sigma_a", "lateral_sigma_b",
+                                           "vertical_sigma", "size_sigma", "yaw_sigma_deg_a", "yaw_sigma_deg_b"};
+  for (const auto& [name, factor] : {std::pair<std::string, double>{"lidar", 0.25}, {"stereo-x2", 2.0}}) {
+    const auto changes = Changes(DetectorProfile(name));
+    EXPECT_EQ(changes.size(), sigmas.size()) << name;
+    for (const std::string& field : sigmas) {
+      ASSERT_TRUE(changes.count(field)) << name << " " << field;
+      EXPECT_DOUBLE_EQ(changes.at(field), factor) << name << " " << field;
+    }
+  }
+  const auto size = Changes(DetectorProfile("size-x3"));
+  ASSERT_EQ(size.size(), 1u);
+  EXPECT_DOUBLE_EQ(size.at("size_sigma"), 3.0);
+  const auto kitti = Changes(DetectorProfile("kitti-boxes"));
+  EXPECT_EQ(kitti.size(), 2u);
+  EXPECT_GE(kitti.at("width_bias"), -0.3);
+  EXPECT_LE(kitti.at("width_bias"), -0.2);
+  EXPECT_NE(kitti.at("along_ray_bias"), 0.0);
+  const DetectorModelOptions flips = DetectorProfile("flips");
+  EXPECT_EQ(flips.flip_probability, 0.08);
+  EXPECT_EQ(Changes(flips).size(), 2u);  // the share and the run length
+  try {
+    DetectorProfile("radar");
+    ADD_FAILURE() << "an unknown profile must throw";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("'radar'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("kitti-boxes"), std::string::npos) << e.what();
+  }
+}
+
+// The default profile draws exactly what the default options draw (existing
+// sequences stay bit-identical).
+TEST(DetectorProfiles, DefaultDrawsAreUnchanged) {
+  StereoDetectorModel a(DetectorModelOptions(), 21), b(DetectorProfile("default"), 21);
+  for (int track = 0; track < 20; ++track) {
+    const ObjectLabel truth = Truth(8.0 + 2.0 * track, 0.05 * (track - 10), 0.4);
+    for (int frame = 0; frame < 10; ++frame) {
+      ObjectLabel da, db;
+      ASSERT_EQ(a.Detect(track, frame, truth, 1000, PinholeCamera(), &da),
+                b.Detect(track, frame, truth, 1000, PinholeCamera(), &db));
+      EXPECT_EQ(da.position, db.position);
+      EXPECT_EQ(da.width, db.width);
+      EXPECT_EQ(da.length, db.length);
+      EXPECT_EQ(da.rotation_y, db.rotation_y);
+    }
+  }
+}
+
+// KITTI-convention boxes are narrower than the true extent by the profile's
+// bias on average, and nearer along the ray; the other profiles' are not.
+TEST(DetectorProfiles, KittiBoxesAreNarrowerAndNearer) {
+  auto mean_errors = [](const DetectorModelOptions& options, double* width, double* along) {
+    StereoDetectorModel model(options, 13);
+    double sum_width = 0.0, sum_along = 0.0;
+    int n = 0;
+    for (int track = 0; track < 1000; ++track) {
+      const ObjectLabel truth = Truth(6.0 + 0.035 * track, 0.0006 * (track - 500), 0.2);
+      for (int frame = 0; frame < 10; ++frame) {
+        ObjectLabel det;
+        DetectionError error;
+        if (!model.Detect(track, frame, truth, 1000, PinholeCamera(), &det, &error)) continue;
+        sum_width += det.width - truth.width;
+        sum_along += error.along_ray;
+        ++n;
+      }
+    }
+    *width = sum_width / n;
+    *along = sum_along / n;
+  };
+  double kitti_width = 0, kitti_along = 0, default_width = 0, default_along = 0;
+  const DetectorModelOptions kitti = DetectorProfile("kitti-boxes");
+  mean_errors(kitti, &kitti_width, &kitti_along);
+  mean_errors(DetectorProfile("default"), &default_width, &default_along);
+  // ~9,500 detections in 1,000 tracks of correlated errors: the standard error of the mean width is ~0.01 m.
+  EXPECT_NEAR(kitti_width, kitti.width_bias, 0.04);
+  EXPECT_NEAR(default_width, 0.0, 0.04);
+  EXPECT_LE(kitti_width - default_width, -0.2);
+  EXPECT_GE(kitti_width - default_width, -0.3);
+  EXPECT_NEAR(kitti_along, kitti.along_ray_bias, 0.05);
+  EXPECT_NEAR(default_along, 0.0, 0.05);
+}
+
+// The true noise model of every profile: its fields are the options' (exact
+// where the format can express them), and the file round-trips through the
+// writer and reader of data/detector_noise.h.
+TEST(DetectorProfiles, TrueModelMatchesTheOptionsAndRoundTrips) {
+  const std::string folder = (std::filesystem::temp_directory_path() / "samp_detector_profiles").string();
+  std::filesystem::create_directories(folder);
+  for (const std::string& name : DetectorProfileNames()) {
+    const DetectorModelOptions o = DetectorProfile(name);
+    const DetectorNoiseModel m = TrueDetectorNoiseModel(o, 5.0, 45.0);
+    EXPECT_NE(m.source.find(name), std::string::npos);
+    EXPECT_EQ(m.along_sigma_a, o.ray_sigma_a) << name;  // c = 0: exact
+    EXPECT_EQ(m.along_sigma_b, o.ray_sigma_b) << name;
+    EXPECT_EQ(m.across_sigma_a, o.lateral_sigma_a) << name;
+    EXPECT_EQ(m.across_sigma_b, o.lateral_sigma_b) << name;
+    EXPECT_EQ(m.vertical_sigma_a, o.vertical_sigma) << name;
+    EXPECT_EQ(m.vertical_sigma_b, 0.0) << name;
+    EXPECT_EQ(m.along_bias, o.along_ray_bias) << name;
+    const double bias[3] = {o.height_bias, o.width_bias, o.length_bias};
+    for (int i = 0; i < 3; ++i) {
+      EXPECT_EQ(m.size_sigma[i], o.size_sigma) << name;
+      EXPECT_EQ(m.size_bias[i], bias[i]) << name;
+    }
+    // The yaw sigma a + b d as its RMS over 5-45 m: between its ends, above its mean.
+    const double yaw_near = o.yaw_sigma_deg_a + 5.0 * o.yaw_sigma_deg_b;
+    const double yaw_far = o.yaw_sigma_deg_a + 45.0 * o.yaw_sigma_deg_b;
+    EXPECT_GE(m.yaw_sigma_deg, 0.5 * (yaw_near + yaw_far)) << name;
+    EXPECT_LE(m.yaw_sigma_deg, yaw_far) << name;
+    EXPECT_EQ(m.flip_rate, o.flip_probability) << name;
+    EXPECT_EQ(m.miss_rate, o.miss_probability) << name;
+    EXPECT_EQ(m.false_positives_per_frame, o.false_positives_per_frame) << name;
+    EXPECT_TRUE(m.biases_estimated);
+    const std::string path = folder + "/" + name + ".json";
+    WriteDetectorNoiseModel(path, m);
+    const DetectorNoiseModel back = ReadDetectorNoiseModel(path);
+    EXPECT_EQ(back.ToJson(), m.ToJson()) << name;
+    EXPECT_EQ(back.size_bias[1], o.width_bias) << name;
+  }
+  std::filesystem::remove_all(folder);
+}
+
+// Where the format cannot express the options: the along-ray c d^2 becomes the
+// least-squares line over the distance range (zero mean error), through
+// a = 0.01 m when the free line's a would be lower (the clean preset's
+// detector); a relative size sigma is taken at a typical box; each
+// approximation is noted. Bad distances and options are errors.
+TEST(DetectorProfiles, TrueModelApproximatesWhatTheFormatCannotExpress) {
+  DetectorModelOptions o;
+  o.ray_sigma_a = 0.3, o.ray_sigma_b = 0.0, o.ray_sigma_c = 0.0005;
+  o.size_sigma = 0.0, o.relative_size_sigma = 0.05;
+  DetectorNoiseModel m = TrueDetectorNoiseModel(o, 5.0, 45.0);
+  double mean_error = 0.0;
+  for (int i = 0; i < 400; ++i) {
+    const double d = 5.05 + 0.1 * i;  // midpoints of 0.1 m steps
+    mean_error += (m.along_sigma_a + m.along_sigma_b * d - (0.3 + 0.0005 * d * d)) / 400.0;
+  }
+  EXPECT_NEAR(mean_error, 0.0, 1e-4);
+  EXPECT_NEAR(m.along_sigma_b, 0.0005 * 2.0 * 25.0, 1e-12);  // the slope of d^2 at the range's centre
+  EXPECT_NEAR(m.size_sigma[2], 0.05 * 4.3, 1e-12);
+  EXPECT_NEAR(m.size_sigma[1], 0.05 * 1.8, 1e-12);
+  auto count_notes = [](const DetectorNoiseModel& model, const std::string& word) {
+    int n = 0;
+    for (const std::string& note : model.notes) n += note.find(word) != std::string::npos;
+    return n;
+  };
+  EXPECT_EQ(count_notes(m, "least-squares"), 1);
+  EXPECT_EQ(count_notes(m, "relative"), 1);
+  // The clean preset's detector, 0.1 + 0.001 d^2: the free line would start below 0.
+  o.ray_sigma_a = 0.1, o.ray_sigma_c = 0.001;
+  m = TrueDetectorNoiseModel(o, 5.0, 45.0);
+  EXPECT_EQ(m.along_sigma_a, 0.01);
+  EXPECT_GT(m.along_sigma_b, 0.02);
+  EXPECT_LT(m.along_sigma_b, 0.06);
+  EXPECT_EQ(count_notes(m, "through a = 0.01"), 1);
+  EXPECT_THROW(TrueDetectorNoiseModel(o, 10.0, 5.0), Error);
+  o.width_bias = std::nan("");
+  EXPECT_THROW(TrueDetectorNoiseModel(o, 5.0, 45.0), Error);
 }
 
 }  // namespace

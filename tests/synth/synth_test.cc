@@ -17,6 +17,7 @@
 #include "libsamp/core/wheels.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/synth/synth.h"
+#include "libsamp/data/detector_noise.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/sequence.h"
 #include "libsamp/fit/fitter.h"
@@ -153,6 +154,10 @@ void CheckLayout(SynthScene scene) {
   EXPECT_TRUE(fs::exists(seq_dir + "/gt/meshes/track_0.ply"));
   EXPECT_TRUE(fs::exists(seq_dir + "/gt/cars.json"));
   EXPECT_TRUE(fs::exists(root + "/config.json"));
+  // The detector's true noise model beside the ground truth, for `samp fit --detector-model`.
+  const DetectorNoiseModel true_model = ReadDetectorNoiseModel(seq_dir + "/gt/detector_model.json");
+  EXPECT_EQ(true_model.ToJson(),
+            TrueDetectorNoiseModel(options.detector, options.min_distance, options.max_distance).ToJson());
   fs::remove_all(root);
 }
 

@@ -18,6 +18,7 @@
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/synth/synth.h"
 #include "tests/synth/test_scene.h"
+#include "tests/tools/samp_process.h"
 
 namespace samp {
 namespace {
@@ -30,46 +31,9 @@ const test::BoxCarScene& TheScene() {
   return scene;
 }
 
-// Starts `samp ARGS` with stdout and stderr into `log_prefix`.{out,err}.
-pid_t StartSamp(const std::vector<std::string>& args, const std::string& log_prefix) {
-  std::vector<std::string> all = {SAMP_BINARY};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  const std::string out = log_prefix + ".out", err = log_prefix + ".err";
-  const pid_t child = ::fork();
-  if (child == 0) {
-    const int out_fd = ::open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int err_fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    if (out_fd < 0 || err_fd < 0) ::_exit(127);
-    ::dup2(out_fd, 1);
-    ::dup2(err_fd, 2);
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  return child;
-}
-
-// Runs `samp ARGS`; returns the exit status (-1 when it did not exit) and
-// its standard error.
-int RunSamp(const std::vector<std::string>& args, const std::string& log_prefix, std::string* stderr_text) {
-  const pid_t child = StartSamp(args, log_prefix);
-  if (child < 0) return -1;
-  int status = 0;
-  if (::waitpid(child, &status, 0) != child) return -1;
-  *stderr_text = test::ReadText(log_prefix + ".err");
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-// The last non-empty line of `text`.
-std::string LastLine(const std::string& text) {
-  std::istringstream in(text);
-  std::string line, last;
-  while (std::getline(in, line))
-    if (!line.empty()) last = line;
-  return last;
-}
+using test::LastLine;
+using test::RunSamp;
+using test::StartSamp;
 
 // Every track fails (an association radius that takes no stereo point: each
 // track is refused by the fitter; tests/pipeline

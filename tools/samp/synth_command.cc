@@ -52,6 +52,7 @@ void RegisterSynthCommand(CLI::App* app) {
     std::string disparity = "sgbm";
     std::string preset = "street";
     std::string layout = "samp";
+    std::string detector_profile;
     bool no_shadows = false;
     std::unique_ptr<SynthOptionTable> table;
   };
@@ -217,7 +218,14 @@ void RegisterSynthCommand(CLI::App* app) {
                 "'true' mode: share of invalid pixels");
   t.Add<double>("--outlier-fraction", [](O& o) -> double& { return o.outlier_fraction; },
                 "'true' mode: share of uniform outliers");
-  // Detector model (docs/synthetic.md, "Detector model").
+  // Detector model (docs/synthetic.md, "Detector model" and "Detector profiles").
+  command
+      ->add_option("--detector-profile", args->detector_profile,
+                   "Detections: a named detector (replaces the preset's; --det-* options given explicitly "
+                   "override its fields): default (the street preset's stereo detector), lidar (position, size "
+                   "and yaw sigmas x 0.25), stereo-x2 (x 2), size-x3 (box size sigmas x 3), kitti-boxes (width "
+                   "0.25 m narrower, 0.2 m nearer along the ray), flips (8 % one-frame flips)")
+      ->check(CLI::IsMember(DetectorProfileNames()));
   t.Add<double>("--det-ray-sigma-a", [](O& o) -> double& { return o.detector.ray_sigma_a; },
                 "Detections: position error std. dev. along the viewing ray a + b d + c d^2: a, m");
   t.Add<double>("--det-ray-sigma-b", [](O& o) -> double& { return o.detector.ray_sigma_b; },
@@ -234,6 +242,14 @@ void RegisterSynthCommand(CLI::App* app) {
                 "Detections: std. dev. of each of h, w, l, m");
   t.Add<double>("--det-relative-size-sigma", [](O& o) -> double& { return o.detector.relative_size_sigma; },
                 "Detections: relative std. dev. of each of h, w, l (added to --det-size-sigma)");
+  t.Add<double>("--det-height-bias", [](O& o) -> double& { return o.detector.height_bias; },
+                "Detections: systematic error of the box height, detected - true, m");
+  t.Add<double>("--det-width-bias", [](O& o) -> double& { return o.detector.width_bias; },
+                "Detections: systematic error of the box width, m (KITTI boxes exclude mirrors: about -0.25)");
+  t.Add<double>("--det-length-bias", [](O& o) -> double& { return o.detector.length_bias; },
+                "Detections: systematic error of the box length, m");
+  t.Add<double>("--det-along-ray-bias", [](O& o) -> double& { return o.detector.along_ray_bias; },
+                "Detections: systematic position error along the viewing ray, m (+ = farther)");
   t.Add<double>("--det-yaw-sigma-a", [](O& o) -> double& { return o.detector.yaw_sigma_deg_a; },
                 "Detections: yaw error std. dev. a + b d: a, deg");
   t.Add<double>("--det-yaw-sigma-b", [](O& o) -> double& { return o.detector.yaw_sigma_deg_b; },
@@ -259,8 +275,9 @@ void RegisterSynthCommand(CLI::App* app) {
              "Detections: cars with fewer visible pixels are never detected");
   AddCommonOptions(command);
   command->callback([args, command] {
-    SynthOptions options =
-        args->table->Apply(args->preset == "clean" ? SynthOptions::Clean() : SynthOptions());
+    SynthOptions preset = args->preset == "clean" ? SynthOptions::Clean() : SynthOptions();
+    if (!args->detector_profile.empty()) preset.detector = DetectorProfile(args->detector_profile);
+    SynthOptions options = args->table->Apply(preset);
     options.output_folder = args->options.output_folder;
     options.disparity =
         args->disparity == "true" ? DisparitySource::kTrueWithNoise : DisparitySource::kStereoSgbm;
