@@ -19,7 +19,9 @@
 // Counters: ms_per_iteration = wall time of the Ceres solves / LM iterations
 // (includes set-up, the initial evaluation and the final pass);
 // ms_per_lm_step = median of Ceres' own iteration times over the LM steps;
-// lm_iterations per fit.
+// lm_iterations per fit; behind_camera (the disparity term) = candidate
+// points dropped because they are not in front of the camera (the track
+// passes beside the camera), FitSummary::num_points_behind_camera.
 #include <benchmark/benchmark.h>
 #include <ceres/ceres.h>
 
@@ -65,11 +67,12 @@ void RunFit(benchmark::State& state, const FitOptions& options) {
   SetLogLevel(LogLevel::kWarning);
   const Fixture& f = GetFixture();
   TrackFitter fitter(f.model, options);
-  int iterations = 0, fits = 0;
+  int iterations = 0, fits = 0, behind_camera = 0;
   double solve_seconds = 0.0;
   std::vector<double> step_seconds;
   for (auto _ : state) {
     const TrackFit fit = fitter.Fit(f.synthetic.track);
+    behind_camera = fit.summary.num_points_behind_camera;
     benchmark::DoNotOptimize(fit.shape_code.data());
     iterations += fit.summary.num_iterations;
     for (const auto& s : fit.summary.solves) {
@@ -84,6 +87,7 @@ void RunFit(benchmark::State& state, const FitOptions& options) {
   std::sort(step_seconds.begin(), step_seconds.end());
   state.counters["ms_per_lm_step"] = step_seconds.empty() ? 0.0 : 1e3 * step_seconds[step_seconds.size() / 2];
   state.counters["points"] = double(f.synthetic.track.frames[0].candidate_points_in_world.size());
+  if (options.data_term == DataTerm::kDisparity) state.counters["behind_camera"] = behind_camera;
 }
 
 void BM_Fit(benchmark::State& state) {
