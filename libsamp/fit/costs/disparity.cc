@@ -81,7 +81,7 @@ bool DisparityCost::EvaluateRows(const double* z, const double* pose, int begin,
     const RayResidual ray = Residual(i, at.phi_z, at.o_cam, u, &m, o, jp ? g : nullptr, dz_row);
     if (!std::isfinite(ray.value)) return false;
     double d_psi = 1.0;
-    residuals[row] = sqrt_weight_ * MixturePsi(ray.value, outlier_threshold_, &d_psi);
+    residuals[row] = sqrt_weight_ * MixturePsiWithC(ray.value, mixture_c_, &d_psi);
     const double f = sqrt_weight_ * d_psi * m;
     WriteJacobianRow(f, at.c, at.s, g, o, at.nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
   }

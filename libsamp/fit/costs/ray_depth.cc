@@ -18,7 +18,8 @@ bool RayDepthCost::ToRayDistance(const double* phi_z, const double* o_cam, const
     double lambda, phi_min;
     const double li = std::sqrt((o[0] - o_cam[0]) * (o[0] - o_cam[0]) + (o[1] - o_cam[1]) * (o[1] - o_cam[1]) +
                                 (o[2] - o_cam[2]) * (o[2] - o_cam[2]));
-    if (FirstCrossing(*lookup_, phi_z, o_cam, u, &lambda, crossing, g_crossing, &phi_min, /*refine_miss=*/false) &&
+    if (FirstCrossing(*lookup_, phi_z, o_cam, u, &lambda, crossing, g_crossing, &phi_min, /*refine_miss=*/false,
+                      /*max_lambda=*/li) &&
         lambda < li && g_crossing[0] * u[0] + g_crossing[1] * u[1] + g_crossing[2] * u[2] < -kMinRaySlope) {
       found = true;
       distance = li - lambda;
@@ -46,13 +47,27 @@ bool RayDepthCost::ToRayDistance(const double* phi_z, const double* o_cam, const
 bool RayDepthCost::EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals,
                                 double* jz, int jz_stride, double* jp, int jp_stride) const {
   // at.o_cam: the camera centre in the object frame (points behind the far side).
-  return DistanceRows(z, pose, begin, end, residuals, jz, jz_stride, jp, jp_stride,
-                      [this](int i, const PoseFrame& at, double* phi, double* o, double* g, double* dz_row) {
-                        if (*phi == 0.0) return;  // phi, g, dz_row stay phi's at o
-                        double u[3];
-                        RayInObject(i, at.c, at.s, u);
-                        ToRayDistance(at.phi_z, at.o_cam, u, phi, o, g, dz_row);
-                      });
+  const PoseFrame at = AtPose(z, pose);
+  for (int row = 0; row < end - begin; ++row) {
+    const int i = begin + row;
+    double o[3], g[3];
+    PointInObject(i, pose, at.c, at.s, o);
+    double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
+    // phi at the point first; its derivatives there only when the residual
+    // stays phi (no crossing along the ray): most rows take them at the crossing.
+    double phi = lookup_->EvaluateDense(at.phi_z, o, nullptr, nullptr);
+    if (!std::isfinite(phi)) return false;
+    bool along_ray = false;
+    if (phi != 0.0) {
+      double u[3];
+      RayInObject(i, at.c, at.s, u);
+      along_ray = ToRayDistance(at.phi_z, at.o_cam, u, &phi, o, g, dz_row);
+    }
+    if (!along_ray && (jp || dz_row)) lookup_->EvaluateDense(at.phi_z, o, jp ? g : nullptr, dz_row);
+    WriteDistanceRow(i, phi, at.c, at.s, g, o, at.nr, &residuals[row], dz_row,
+                     jp ? jp + size_t(row) * jp_stride : nullptr);
+  }
+  return true;
 }
 
 }  // namespace samp

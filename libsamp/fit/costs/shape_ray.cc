@@ -123,7 +123,7 @@ bool RayDistance(const ShapeLookup& lookup, const double* phi_z, const double* o
 }
 
 bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double* o_cam, const double* u,
-                   double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss) {
+                   double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss, double max_lambda) {
   const GridSpec& grid = lookup.grid();
   auto finish_miss = [&](double l) {
     *lambda = l;
@@ -157,6 +157,7 @@ bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double*
     ++count;
     if (v < 0.0) break;
     if (l >= leave || count > kMaxTraceSteps) break;
+    if (l > max_lambda) return false;  // positive beyond max_lambda: any crossing lies beyond it
     l = std::min(l + std::max(v, min_step), leave);
   }
   if (vs[count - 1] < 0.0 && count >= 2) {

@@ -16,6 +16,8 @@
 // distance moves fast with the parameters.
 #pragma once
 
+#include <limits>
+
 #include "libsamp/model/shape_lookup.h"
 
 namespace samp {
@@ -34,7 +36,11 @@ bool RayDistance(const ShapeLookup& lookup, const double* phi_z, const double* o
 // caller clamps a grazing slope). Miss: *lambda = lambda* of the smallest phi
 // along the ray (c, g_c there, *phi_min = phi(c)), false; without refine_miss
 // a miss that needs the search returns false at once (c, g_c, *phi_min unset).
+// max_lambda (finite: only without refine_miss): the caller needs a crossing
+// at lambda < max_lambda only; the trace stops after its first sample beyond
+// it (any later crossing would lie beyond it too) and returns false.
 bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double* o_cam, const double* u,
-                   double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss = true);
+                   double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss = true,
+                   double max_lambda = std::numeric_limits<double>::infinity());
 
 }  // namespace samp
