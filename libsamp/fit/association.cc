@@ -48,13 +48,15 @@ Association AssociateByFit(const TrackFrame& f, const ShapeLookup& lookup, const
   const Eigen::Isometry3d object_from_world = ObjectFromWorld(pose.head<3>(), pose[3]);
   const Eigen::Vector3d lo = box.min - Eigen::Vector3d::Constant(options.em_box_margin);
   const Eigen::Vector3d hi = box.max + Eigen::Vector3d::Constant(options.em_box_margin);
+  // phi_z from the dense grid of z (the same value as lookup.Evaluate(z, o), bit for bit).
+  const double* phi_z = lookup.DenseCached(z.data());
   for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
     const Eigen::Vector3d o = object_from_world * f.candidate_points_in_world[i];
     if ((o.array() < lo.array()).any() || (o.array() > hi.array()).any()) {
       ++outside_box;
       continue;
     }
-    if (std::abs(lookup.Evaluate(z.data(), o.data(), nullptr, nullptr)) >= options.em_distance_threshold) {
+    if (std::abs(lookup.EvaluateDenseValue(phi_z, o.data())) >= options.em_distance_threshold) {
       ++too_far;
       continue;
     }
