@@ -13,7 +13,8 @@ bool RayDepthCost::EvaluateRows(const double* z, const double* pose, int begin, 
   const PoseFrame at = AtPose(z, pose);
   const int nr = at.nr;
   // Groups of kRayBatch points: the rays of a group are marched in lockstep
-  // (RayDistances, FirstCrossings); each row is what ToRayDistance gives.
+  // (RayDistances, FirstCrossings); each ray's result is the single-ray
+  // RayDistance's / FirstCrossing's.
   for (int first = begin; first < end; first += kRayBatch) {
     const int count = std::min(kRayBatch, end - first);
     double o[kRayBatch][3], phi[kRayBatch], u[kRayBatch][3];
