@@ -252,6 +252,7 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
     Trace& a = t[r];
     a.count = 0;
     a.bracketed = false;
+    a.last_l = a.last_v = a.prev_l = a.prev_v = 0.0;
     // A ray passing the grid box misses (FirstCrossing's closest approach is
     // not needed without refine_miss).
     a.active = GridBoxSpan(lookup.grid(), o_cam, rays[r].u, &a.l, &a.leave);
