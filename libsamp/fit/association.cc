@@ -19,8 +19,13 @@ Association AssociateByDetection(const TrackFrame& f, double radius, DataTerm te
   gate.radius = radius;
   gate.ray_sigmas = term == DataTerm::kDisparity ? 3.0 : 0.0;
   const double centre_depth = (gate.box_centre - gate.camera_centre).dot(gate.optical_axis);
+  const Eigen::Vector3d axis = gate.optical_axis.normalized();  // as DataTermOptions gives it the cost
   for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
     const Eigen::Vector3d& p = f.candidate_points_in_world[i];
+    if (term == DataTerm::kDisparity && !InFrontOfCamera(p, gate.camera_centre, axis)) {
+      ++a.behind_camera;
+      continue;
+    }
     if (gate.ray_sigmas > 0.0) {
       // The point's sigma_d at the centre's depth (sigma_d grows with z^2:
       // the point's own sigma would let far background pass).
@@ -43,13 +48,15 @@ Association AssociateByFit(const TrackFrame& f, const ShapeLookup& lookup, const
   const Eigen::Isometry3d object_from_world = ObjectFromWorld(pose.head<3>(), pose[3]);
   const Eigen::Vector3d lo = box.min - Eigen::Vector3d::Constant(options.em_box_margin);
   const Eigen::Vector3d hi = box.max + Eigen::Vector3d::Constant(options.em_box_margin);
+  // phi_z from the dense grid of z (the same value as lookup.Evaluate(z, o), bit for bit).
+  const double* phi_z = lookup.DenseCached(z.data());
   for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
     const Eigen::Vector3d o = object_from_world * f.candidate_points_in_world[i];
     if ((o.array() < lo.array()).any() || (o.array() > hi.array()).any()) {
       ++outside_box;
       continue;
     }
-    if (std::abs(lookup.Evaluate(z.data(), o.data(), nullptr, nullptr)) >= options.em_distance_threshold) {
+    if (std::abs(lookup.EvaluateDenseValue(phi_z, o.data())) >= options.em_distance_threshold) {
       ++too_far;
       continue;
     }
@@ -73,14 +80,33 @@ Association AssociateByResiduals(const TrackFrame& f, const ShapeLookup& lookup,
     *why = "no candidate points (none inside the detection's 2D box above the road)";
     return a;
   }
-  const DisparityCost cost(&lookup, f.candidate_points_in_world, f.candidate_sigmas, cost_options);
+  // The disparity term needs a positive depth: the others are dropped and counted.
+  std::vector<Eigen::Vector3d> points;
+  std::vector<double> sigmas;
+  points.reserve(f.candidate_points_in_world.size());
+  sigmas.reserve(f.candidate_points_in_world.size());
+  for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
+    if (!InFrontOfCamera(f.candidate_points_in_world[i], cost_options.camera_in_world,
+                         cost_options.camera_axis_in_world)) {
+      ++a.behind_camera;
+      continue;
+    }
+    points.push_back(f.candidate_points_in_world[i]);
+    sigmas.push_back(f.candidate_sigmas[i]);
+  }
+  if (points.empty()) {
+    s << "no candidate point in front of the camera (" << a.behind_camera << " behind it)";
+    *why = s.str();
+    return a;
+  }
+  const DisparityCost cost(&lookup, points, sigmas, cost_options);
   const std::vector<RayResidual> residuals = cost.RayResiduals(z.data(), pose.data());
   int in_front = 0, behind = 0, missing = 0;
   for (size_t i = 0; i < residuals.size(); ++i) {
     const RayResidual& r = residuals[i];
     if (std::abs(r.value) < options.outlier_threshold) {
-      a.points.push_back(f.candidate_points_in_world[i]);
-      a.sigmas.push_back(f.candidate_sigmas[i]);
+      a.points.push_back(points[i]);
+      a.sigmas.push_back(sigmas[i]);
     } else if (!r.hit) {
       ++missing;
     } else if (r.value > 0.0) {
@@ -89,10 +115,11 @@ Association AssociateByResiduals(const TrackFrame& f, const ShapeLookup& lookup,
       ++behind;
     }
   }
-  s << a.points.size() << " of " << residuals.size() << " candidates kept; " << in_front
+  s << a.points.size() << " of " << f.candidate_points_in_world.size() << " candidates kept; " << in_front
     << " in front of the fitted surface, " << behind << " behind it (by > " << options.outlier_threshold
     << " sigma_disp), " << missing << " on rays missing the shape by > " << options.outlier_threshold
     << " silhouette sigmas";
+  if (a.behind_camera > 0) s << ", " << a.behind_camera << " not in front of the camera";
   *why = s.str();
   return a;
 }

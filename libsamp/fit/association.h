@@ -21,6 +21,9 @@ namespace samp {
 struct Association {
   std::vector<Eigen::Vector3d> points;
   std::vector<double> sigmas;
+  // kDisparity: candidates dropped because they are not in front of the
+  // camera (InFrontOfCamera, costs/disparity.h); 0 for the other terms.
+  int behind_camera = 0;
 };
 
 // First association around the detection's box centre (InDetectionGate):
@@ -29,7 +32,8 @@ struct Association {
 // the ray lies within radius + 3 sigma (the point's sigma_d scaled to the
 // centre's depth, along the ray) of the centre's: a sphere would cut the
 // stereo noise of far cars (sigma of metres along the ray) unevenly about a
-// detection that is itself off along the ray, and bias the fit.
+// detection that is itself off along the ray, and bias the fit. kDisparity
+// drops (and counts) the candidates that are not in front of the camera.
 Association AssociateByDetection(const TrackFrame& f, double radius, DataTerm term);
 
 // EM association of kPaper / kRayDepth: the candidates inside the fitted
@@ -44,8 +48,9 @@ Association AssociateByFit(const TrackFrame& f, const ShapeLookup& lookup, const
 // threshold): on a ray that meets the shape, a disparity within s_0 sigma of
 // the visible surface's; on a ray that misses it, within s_0 silhouette
 // sigmas of the silhouette. `cost_options`: the frame's disparity-term
-// options (DataTermOptions, track_problem.h). *why says how many were dropped
-// and why.
+// options (DataTermOptions, track_problem.h). The candidates not in front of
+// the camera are dropped and counted (Association::behind_camera). *why says
+// how many were dropped and why.
 Association AssociateByResiduals(const TrackFrame& f, const ShapeLookup& lookup, const DataCostOptions& cost_options,
                                  const Eigen::VectorXd& z, const Eigen::Vector4d& pose, const FitOptions& options,
                                  std::string* why);

@@ -225,6 +225,7 @@ std::string FitSummary::BriefReport() const {
     << initial_cost << " -> " << final_cost << ", " << seconds * 1e3 << " ms"
     << (usable ? "" : " [NOT USABLE]");
   if (!solves.empty()) s << ", last: " << solves.back().termination;
+  if (num_points_behind_camera > 0) s << ", " << num_points_behind_camera << " points behind the camera dropped";
   return s.str();
 }
 
@@ -270,6 +271,11 @@ TrackFit TrackFitter::Fit(const Track& track) const {
   fit.type = track.type;
   fit.single_frame = single;
   FitSummary& summary = fit.summary;
+  for (const Association& a : data) summary.num_points_behind_camera += a.behind_camera;
+  if (summary.num_points_behind_camera > 0) {
+    LogInfo() << name << ": " << summary.num_points_behind_camera
+              << " candidate point(s) not in front of the camera dropped (disparity term)";
+  }
   const double first_scale = options_.em_iterations > 0 ? options_.em_initial_sigma_scale : 1.0;
   summary.solves.push_back(Solve(lookup_, track, data, first_scale, options_, linear_solver_, &state));
   for (int it = 0; it < options_.em_iterations; ++it) {

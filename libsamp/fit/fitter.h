@@ -42,6 +42,9 @@ struct FitSummary {
   double seconds = 0.0;             // whole fit including association
   bool usable = false;              // every solve usable
   int num_frames_reset = 0;         // frames reset to their initial pose (FitOptions::max_position_change)
+  // kDisparity: candidate points dropped because they are not in front of the
+  // camera (no disparity), summed over the frames (each frame's candidates once).
+  int num_points_behind_camera = 0;
   std::string BriefReport() const;
   // Why the fit cannot be reported as fitted: the first solve Ceres marks not
   // usable (IsSolutionUsable() false: its number and termination), or no solve

@@ -106,6 +106,31 @@ double NaNResult(int num_components, double* d_point, double* d_z) {
   return nan;
 }
 
+// phi_z = mu + W z on voxels [0, d) into out (double or float), each voxel's
+// sum in the order mu, then r = 0 .. R - 1 (as Evaluate sums a corner); kR > 0
+// fixes R at compile time.
+template <int kR, typename Out>
+void DenseKernel(const float* mean, const float* components, int num_components, const double* z, size_t d,
+                 Out* out) {
+  const size_t nr = kR > 0 ? size_t(kR) : size_t(num_components);
+  for (size_t v = 0; v < d; ++v) {
+    const float* row = components + v * nr;
+    double s = mean[v];
+    for (size_t r = 0; r < nr; ++r) s += double(row[r]) * z[r];
+    out[v] = Out(s);
+  }
+}
+
+template <typename Out>
+void DenseAnyR(const float* mean, const float* components, int num_components, const double* z, size_t d,
+               Out* out) {
+  switch (num_components) {
+    case 5: return DenseKernel<5>(mean, components, 5, z, d, out);
+    case 10: return DenseKernel<10>(mean, components, 10, z, d, out);
+    default: return DenseKernel<0>(mean, components, num_components, z, d, out);
+  }
+}
+
 // The per-thread dense grid of the last code asked for.
 struct DenseCache {
   uint64_t owner = 0;
@@ -176,12 +201,7 @@ const double* ShapeLookup::DenseCached(const double* z) const {
   cache.owner = 0;  // invalid while being filled
   cache.code.assign(z, z + nr);
   cache.phi.resize(d);
-  for (size_t v = 0; v < d; ++v) {
-    const float* row = &components_[v * nr];
-    double s = mean_[v];
-    for (size_t r = 0; r < nr; ++r) s += double(row[r]) * z[r];
-    cache.phi[v] = s;
-  }
+  DenseAnyR(mean_.data(), components_.data(), num_components_, z, d, cache.phi.data());
   cache.owner = id_;
   return cache.phi.data();
 }
@@ -198,40 +218,75 @@ double ShapeLookup::Evaluate(const Eigen::VectorXd& z, const Eigen::Vector3d& po
 std::vector<float> ShapeLookup::Dense(const Eigen::VectorXd& z) const {
   SAMP_CHECK(z.size() == num_components_)
       << "shape code has " << z.size() << " values, model has " << num_components_;
-  const int64_t d = grid_.NumVoxels();
-  std::vector<float> out(static_cast<size_t>(d));
-  const double* phi = DenseCached(z.data());
-  for (int64_t v = 0; v < d; ++v) out[size_t(v)] = float(phi[v]);
+  std::vector<float> out(mean_.size());
+  DenseAnyR(mean_.data(), components_.data(), num_components_, z.data(), mean_.size(), out.data());
   return out;
 }
 
 AlignedBox ShapeLookup::InsideBox(const Eigen::VectorXd& z) const {
-  const std::vector<float> phi = Dense(z);
-  AlignedBox box;
+  SAMP_CHECK(z.size() == num_components_)
+      << "shape code has " << z.size() << " values, model has " << num_components_;
+  // phi_z as floats (as Dense()), in a per-thread buffer.
+  thread_local std::vector<float> phi;
+  phi.resize(mean_.size());
+  DenseAnyR(mean_.data(), components_.data(), num_components_, z.data(), mean_.size(), phi.data());
   const Eigen::Vector3i& n = grid_.dims;
+  const int64_t stride[3] = {1, int64_t(n.x()), int64_t(n.x()) * n.y()};
+  // The slices along each axis that hold a voxel with phi < 0.
+  std::vector<uint8_t> has[3] = {std::vector<uint8_t>(size_t(n.x()), 0), std::vector<uint8_t>(size_t(n.y()), 0),
+                                 std::vector<uint8_t>(size_t(n.z()), 0)};
   for (int k = 0; k < n.z(); ++k) {
     for (int j = 0; j < n.y(); ++j) {
+      const float* row = &phi[size_t(grid_.Index(0, j, k))];
+      uint8_t any = 0;
       for (int i = 0; i < n.x(); ++i) {
-        const float v = phi[size_t(grid_.Index(i, j, k))];
-        if (!(v < 0.0f)) continue;
-        const Eigen::Vector3d p = grid_.Position(i, j, k);
-        box.Extend(p);
-        // Sub-voxel refinement towards outside neighbours along each axis.
-        const int idx[3] = {i, j, k};
-        for (int a = 0; a < 3; ++a) {
-          for (int s = -1; s <= 1; s += 2) {
-            int nb[3] = {i, j, k};
-            nb[a] = idx[a] + s;
-            if (nb[a] < 0 || nb[a] >= n[a]) continue;
-            const float w = phi[size_t(grid_.Index(nb[0], nb[1], nb[2]))];
-            if (w < 0.0f) continue;
-            Eigen::Vector3d e = p;
-            e[a] += s * grid_.voxel_size * double(v) / double(v - w);
-            box.Extend(e);
+        const uint8_t negative = row[i] < 0.0f;
+        has[0][size_t(i)] |= negative;
+        any |= negative;
+      }
+      has[1][size_t(j)] |= any;
+      has[2][size_t(k)] |= any;
+    }
+  }
+  AlignedBox box;
+  for (int a = 0; a < 3; ++a) {
+    int lo = 0, hi = n[a] - 1;
+    while (lo < n[a] && !has[a][size_t(lo)]) ++lo;
+    if (lo == n[a]) return AlignedBox();  // phi_z >= 0 everywhere
+    while (!has[a][size_t(hi)]) --hi;
+    // The box's extent along a: the inside voxels' positions and their zero
+    // crossings towards outside neighbours along a (linear interpolation),
+    // extreme in the first and last inside slices; the second slices are
+    // scanned too (a crossing one voxel back can tie the first slice's).
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    auto scan = [&](int slice, int side, double* extreme) {
+      if (slice < 0 || slice >= n[a]) return;
+      const double position = grid_.origin[a] + grid_.voxel_size * double(slice);
+      const bool has_neighbour = slice + side >= 0 && slice + side < n[a];
+      for (int q = 0; q < n[c]; ++q) {
+        for (int p = 0; p < n[b]; ++p) {
+          const int64_t index = slice * stride[a] + p * stride[b] + q * stride[c];
+          const float v = phi[size_t(index)];
+          if (!(v < 0.0f)) continue;
+          double x = position;
+          if (has_neighbour) {
+            const float w = phi[size_t(index + side * stride[a])];
+            if (!(w < 0.0f)) {
+              const double e = position + side * grid_.voxel_size * double(v) / double(v - w);
+              x = side < 0 ? std::min(x, e) : std::max(x, e);
+            }
           }
+          *extreme = side < 0 ? std::min(*extreme, x) : std::max(*extreme, x);
         }
       }
-    }
+    };
+    double low = std::numeric_limits<double>::infinity(), high = -low;
+    scan(lo, -1, &low);
+    scan(lo + 1, -1, &low);
+    scan(hi, +1, &high);
+    scan(hi - 1, +1, &high);
+    box.min[a] = low;
+    box.max[a] = high;
   }
   return box;
 }

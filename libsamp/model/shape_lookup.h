@@ -14,6 +14,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -49,6 +50,34 @@ class ShapeLookup {
   // d/dpoint (3) and d/dz (R; independent of z: the trilinear weights on W).
   // Same value and gradients as Evaluate(z, ..) up to rounding.
   double EvaluateDense(const double* phi, const double* point, double* d_point, double* d_z) const;
+
+  // EvaluateDense(phi, point, nullptr, nullptr), bit for bit, inlined: the
+  // ray marches' samples. Points inside the grid box take a short path (no
+  // clamping); the others, and non-finite ones, the general one.
+  double EvaluateDenseValue(const double* phi, const double* point) const {
+    const double* lo = grid_.origin.data();
+    const double* hi = max_corner_.data();
+    if (!(point[0] >= lo[0] && point[0] <= hi[0] && point[1] >= lo[1] && point[1] <= hi[1] && point[2] >= lo[2] &&
+          point[2] <= hi[2])) {
+      return EvaluateDense(phi, point, nullptr, nullptr);
+    }
+    int i0[3];
+    double f[3];
+    for (int a = 0; a < 3; ++a) {
+      const double u = (point[a] - lo[a]) * inv_voxel_;
+      const int i = std::min(std::max(int(u), 0), grid_.dims[a] - 2);
+      i0[a] = i;
+      f[a] = u - i;
+    }
+    const int64_t nx = grid_.dims.x(), nxy = nx * grid_.dims.y();
+    const double* c = phi + (i0[0] + nx * i0[1] + nxy * i0[2]);
+    const double fx = f[0], fy = f[1], fz = f[2];
+    const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
+    const double c00 = gx * c[0] + fx * c[1], c10 = gx * c[nx] + fx * c[nx + 1];
+    const double c01 = gx * c[nxy] + fx * c[nxy + 1], c11 = gx * c[nxy + nx] + fx * c[nxy + nx + 1];
+    const double c0 = gy * c00 + fy * c10, c1 = gy * c01 + fy * c11;
+    return gz * c0 + fz * c1 + 0.0;  // + the distance to the box, 0 inside (as EvaluateDense)
+  }
 
   // Dense phi_z on the grid (D floats, GridSpec::Index order).
   std::vector<float> Dense(const Eigen::VectorXd& z) const;

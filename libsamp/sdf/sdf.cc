@@ -929,6 +929,10 @@ bool ClosingOutside(const GridSpec& grid, const std::vector<float>& distance,
   }
   std::stable_sort(offsets.begin(), offsets.end(),
                    [](const Offset& a, const Offset& b) { return a.squared_voxels < b.squared_voxels; });
+  std::vector<int64_t> steps(offsets.size());  // linear index step of each offset
+  for (size_t q = 0; q < offsets.size(); ++q) {
+    steps[q] = offsets[q].di + int64_t(nx) * (offsets[q].dj + int64_t(ny) * offsets[q].dk);
+  }
   const float on_surface = 1e-3f * h;
   const float h2 = h * h;
   for (int k = 0; k < nz; ++k) {
@@ -943,6 +947,21 @@ bool ClosingOutside(const GridSpec& grid, const std::vector<float>& distance,
         if (d > tau) continue;  // enclosed: inside
         if (!(d > on_surface)) {
           (*closed_outside)[v] = carved[v];  // on the surface
+          continue;
+        }
+        // At least `reach` voxels from the border every offset stays in the
+        // grid: linear index steps, no bounds checks (the same offsets in the
+        // same order, so the same answer).
+        const bool interior =
+            i >= reach && j >= reach && k >= reach && i < nx - reach && j < ny - reach && k < nz - reach;
+        if (interior) {
+          for (size_t q = 0; q < offsets.size(); ++q) {
+            const size_t u = size_t(int64_t(v) + steps[q]);
+            if (fill[u] && offsets[q].squared_voxels * h2 < distance[u] * distance[u]) {
+              (*closed_outside)[v] = 1;
+              break;
+            }
+          }
           continue;
         }
         for (const Offset& o : offsets) {

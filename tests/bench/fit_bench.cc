@@ -19,12 +19,18 @@
 // Counters: ms_per_iteration = wall time of the Ceres solves / LM iterations
 // (includes set-up, the initial evaluation and the final pass);
 // ms_per_lm_step = median of Ceres' own iteration times over the LM steps;
-// lm_iterations per fit.
+// lm_iterations per fit; behind_camera (the disparity term) = candidate
+// points dropped because they are not in front of the camera (the track
+// passes beside the camera), FitSummary::num_points_behind_camera.
+// `fit_bench --fit_dump` prints the fit outputs of the BM_Fit configurations
+// instead (17 digits), to compare two builds.
 #include <benchmark/benchmark.h>
 #include <ceres/ceres.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
+#include <string>
 #include <vector>
 
 #include "libsamp/core/log.h"
@@ -65,11 +71,12 @@ void RunFit(benchmark::State& state, const FitOptions& options) {
   SetLogLevel(LogLevel::kWarning);
   const Fixture& f = GetFixture();
   TrackFitter fitter(f.model, options);
-  int iterations = 0, fits = 0;
+  int iterations = 0, fits = 0, behind_camera = 0;
   double solve_seconds = 0.0;
   std::vector<double> step_seconds;
   for (auto _ : state) {
     const TrackFit fit = fitter.Fit(f.synthetic.track);
+    behind_camera = fit.summary.num_points_behind_camera;
     benchmark::DoNotOptimize(fit.shape_code.data());
     iterations += fit.summary.num_iterations;
     for (const auto& s : fit.summary.solves) {
@@ -84,6 +91,7 @@ void RunFit(benchmark::State& state, const FitOptions& options) {
   std::sort(step_seconds.begin(), step_seconds.end());
   state.counters["ms_per_lm_step"] = step_seconds.empty() ? 0.0 : 1e3 * step_seconds[step_seconds.size() / 2];
   state.counters["points"] = double(f.synthetic.track.frames[0].candidate_points_in_world.size());
+  if (options.data_term == DataTerm::kDisparity) state.counters["behind_camera"] = behind_camera;
 }
 
 void BM_Fit(benchmark::State& state) {
@@ -278,7 +286,51 @@ void BM_FitAutodiffPerPoint(benchmark::State& state) {
 }
 BENCHMARK(BM_FitAutodiffPerPoint)->Unit(benchmark::kMillisecond);
 
+// --fit_dump: the fitted code, poses and costs of every BM_Fit configuration
+// (one fit each, 17 significant digits), to compare two builds' fit outputs.
+void DumpFits() {
+  SetLogLevel(LogLevel::kWarning);
+  const Fixture& f = GetFixture();
+  const int configs[][4] = {{0, 1, 1, 250}, {1, 1, 1, 250}, {0, 1, 0, 250}, {1, 1, 0, 250}, {1, 1, 1, 0},
+                            {1, 1, 0, 0},   {1, 0, 1, 250}, {1, 1, 2, 0}};
+  for (const auto& c : configs) {
+    FitOptions options;
+    options.em_iterations = c[0];
+    options.compress_data_blocks = c[1] != 0;
+    const DataTerm terms[] = {DataTerm::kPaper, DataTerm::kRayDepth, DataTerm::kDisparity};
+    options.data_term = terms[c[2]];
+    options.max_solve_points_per_frame = c[3];
+    if (options.data_term == DataTerm::kPaper) {
+      options.data_weighting = DataWeighting::kMean;
+      options.mixture_loss = false;
+      options.detection_size_sigma = 0.0;
+      options.detection_position = false;
+    }
+    const TrackFit fit = TrackFitter(f.model, options).Fit(f.synthetic.track);
+    std::printf("em:%d/compressed:%d/term:%d/cap:%d iterations %d cost %.17g -> %.17g\n  code", c[0], c[1], c[2],
+                c[3], fit.summary.num_iterations, fit.summary.initial_cost, fit.summary.final_cost);
+    for (int r = 0; r < fit.shape_code.size(); ++r) std::printf(" %.17g", fit.shape_code[r]);
+    std::printf("\n");
+    for (const FrameFit& ff : fit.frames) {
+      std::printf("  frame %d points %d position %.17g %.17g %.17g yaw %.17g data_cost %.17g\n", ff.frame,
+                  ff.num_points, ff.position.x(), ff.position.y(), ff.position.z(), ff.yaw, ff.data_cost);
+    }
+  }
+}
+
 }  // namespace
 }  // namespace samp
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  for (int a = 1; a < argc; ++a) {
+    if (std::string(argv[a]) == "--fit_dump") {
+      samp::DumpFits();
+      return 0;
+    }
+  }
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -6,6 +6,8 @@
 
 #include <vector>
 
+#include "libsamp/fit/costs/disparity.h"
+
 namespace samp {
 namespace {
 
@@ -38,6 +40,24 @@ TEST(Association, DetectionGateIsASphereForThePointTermsAndFollowsTheRayForDispa
   // With a small sigma the same point falls outside the ray gate too.
   f.candidate_sigmas = {0.05, 0.05, 0.05};
   EXPECT_EQ(AssociateByDetection(f, 3.0, DataTerm::kDisparity).points.size(), 1u);
+}
+
+TEST(Association, DisparityDropsAndCountsPointsBehindTheCamera) {
+  // A point behind the camera has no disparity; with a large sigma it would
+  // pass the ray gate (its sigma scaled to the centre's depth is huge).
+  TrackFrame f = FrameAhead();
+  const Eigen::Vector3d centre(0.0, 0.9, 20.0);
+  f.candidate_points_in_world = {centre, -0.5 * centre, Eigen::Vector3d(3.0, 0.0, 0.0), centre * 1.01};
+  f.candidate_sigmas = {0.5, 5.0, 5.0, 0.5};
+  const Association ray = AssociateByDetection(f, 3.0, DataTerm::kDisparity);
+  EXPECT_EQ(ray.behind_camera, 2);  // behind it, and beside it at depth 0
+  ASSERT_EQ(ray.points.size(), 2u);
+  EXPECT_EQ(ray.points[0], f.candidate_points_in_world[0]);
+  EXPECT_EQ(ray.points[1], f.candidate_points_in_world[3]);
+  EXPECT_EQ(AssociateByDetection(f, 3.0, DataTerm::kRayDepth).behind_camera, 0);  // counted for disparity only
+  EXPECT_TRUE(InFrontOfCamera(centre, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()));
+  EXPECT_FALSE(InFrontOfCamera(-centre, Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()));
+  EXPECT_FALSE(InFrontOfCamera(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()));
 }
 
 TEST(Association, SolveSubsampleSpreadsEvenlyAndKeepsSmallAssociations) {

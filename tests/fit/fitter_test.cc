@@ -12,6 +12,8 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/data/sequence.h"
+#include "libsamp/fit/costs/disparity.h"
+#include "libsamp/fit/track_problem.h"
 #include "libsamp/model/shape_model.h"
 #include "tests/fit/fit_test_util.h"
 #include "tests/testing/expect_error.h"
@@ -217,6 +219,46 @@ TEST(Fitter, RayDistanceRemovesThePullTowardsTheCameraUnderDepthNoise) {
   EXPECT_LT(std::abs(ray_error), std::abs(sdf_error));
   // Each point against the visible surface on its own ray: no pull.
   EXPECT_LT(std::abs(disparity_error), 0.05) << "phi " << sdf_error << ", ray depth " << ray_error << ", disparity " << disparity_error;
+}
+
+TEST(Fitter, DisparityFitDropsAndCountsPointsBehindTheCamera) {
+  // Candidates behind the camera (at the world origin, looking along +z)
+  // and one at depth 0 beside it: the disparity term has no residual for
+  // them. The fit drops and counts them in both associations (the
+  // detection's and the EM pass's) instead of throwing.
+  const ShapeLookup lookup(Model());
+  Synthetic s = MakeTrack(lookup, 5, 8.0, 0.0, 200, 31);
+  Synthetic clean = s;
+  int planted = 0;
+  for (TrackFrame& f : s.track.frames) {
+    const Eigen::Vector3d ahead = f.candidate_points_in_world[0];
+    for (const Eigen::Vector3d& p : {Eigen::Vector3d(-ahead), Eigen::Vector3d(-0.1 * ahead),
+                                     Eigen::Vector3d(ahead.x(), ahead.y(), 0.0)}) {
+      f.candidate_points_in_world.push_back(p);
+      f.candidate_sigmas.push_back(50.0);  // would pass the ray gate
+      ++planted;
+    }
+  }
+  FitOptions options;
+  options.data_term = DataTerm::kDisparity;
+  options.em_iterations = 1;
+  const TrackFitter fitter(Model(), options);
+  TrackFit fit;
+  ASSERT_NO_THROW(fit = fitter.Fit(s.track));
+  EXPECT_TRUE(fit.summary.usable) << fit.summary.BriefReport();
+  EXPECT_EQ(fit.summary.solves.size(), 2u);
+  EXPECT_EQ(fit.summary.num_points_behind_camera, planted);
+  EXPECT_NE(fit.summary.BriefReport().find(std::to_string(planted) + " points behind the camera dropped"),
+            std::string::npos)
+      << fit.summary.BriefReport();
+  // Dropped, not used: the same fit as without them.
+  const TrackFit reference = fitter.Fit(clean.track);
+  EXPECT_EQ(reference.summary.num_points_behind_camera, 0);
+  EXPECT_EQ(fit.shape_code, reference.shape_code);
+  for (size_t k = 0; k < fit.frames.size(); ++k) EXPECT_EQ(fit.frames[k].position, reference.frames[k].position);
+  // The cost itself still refuses such a point (the fit never gives it one).
+  DataCostOptions cost_options = DataTermOptions(s.track, s.track.frames[0], options, 1.0);
+  EXPECT_THROW(DisparityCost(&lookup, {Eigen::Vector3d(0.0, 0.0, -5.0)}, {0.1}, cost_options), Error);
 }
 
 // Height of the shape phi_z (extent of phi < 0 along object y), m.

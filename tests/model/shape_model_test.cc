@@ -124,6 +124,77 @@ TEST(ShapeLookup, EvaluateMatchesBruteForceTrilinear) {
   }
 }
 
+// Reference for InsideBox: every inside voxel and its crossings towards
+// outside neighbours along each axis (linear interpolation), all voxels scanned.
+AlignedBox InsideBoxByFullScan(const ShapeLookup& lookup, const Eigen::VectorXd& z) {
+  const std::vector<float> phi = lookup.Dense(z);
+  const GridSpec& grid = lookup.grid();
+  const Eigen::Vector3i& n = grid.dims;
+  AlignedBox box;
+  for (int k = 0; k < n.z(); ++k)
+    for (int j = 0; j < n.y(); ++j)
+      for (int i = 0; i < n.x(); ++i) {
+        const float v = phi[size_t(grid.Index(i, j, k))];
+        if (!(v < 0.0f)) continue;
+        const Eigen::Vector3d p = grid.Position(i, j, k);
+        box.Extend(p);
+        const int idx[3] = {i, j, k};
+        for (int a = 0; a < 3; ++a)
+          for (int s = -1; s <= 1; s += 2) {
+            int nb[3] = {i, j, k};
+            nb[a] = idx[a] + s;
+            if (nb[a] < 0 || nb[a] >= n[a]) continue;
+            const float w = phi[size_t(grid.Index(nb[0], nb[1], nb[2]))];
+            if (w < 0.0f) continue;
+            Eigen::Vector3d e = p;
+            e[a] += s * grid.voxel_size * double(v) / double(v - w);
+            box.Extend(e);
+          }
+      }
+  return box;
+}
+
+TEST(ShapeLookup, InsideBoxEqualsTheFullScan) {
+  // Random fields (inside voxels on the grid's border too) with R = 3 and
+  // R = 5 (the compile-time kernel), and a ball (inside voxels in the middle).
+  for (const int r : {3, 5}) {
+    const ShapeModel model = RandomModel(r, 40 + r);
+    const ShapeLookup lookup(model);
+    std::mt19937 rng(7);
+    std::normal_distribution<double> n(0.0, 1.0);
+    for (int trial = 0; trial < 20; ++trial) {
+      Eigen::VectorXd z(r);
+      for (int c = 0; c < r; ++c) z[c] = 0.8 * n(rng);
+      const AlignedBox fast = lookup.InsideBox(z), full = InsideBoxByFullScan(lookup, z);
+      ASSERT_EQ(fast.IsEmpty(), full.IsEmpty());
+      if (full.IsEmpty()) continue;
+      EXPECT_EQ(fast.min, full.min) << "R " << r << " trial " << trial;
+      EXPECT_EQ(fast.max, full.max) << "R " << r << " trial " << trial;
+    }
+  }
+  ShapeModel ball = RandomModel(5, 3);
+  for (int k = 0; k < ball.grid.dims.z(); ++k)
+    for (int j = 0; j < ball.grid.dims.y(); ++j)
+      for (int i = 0; i < ball.grid.dims.x(); ++i) {
+        const int64_t v = ball.grid.Index(i, j, k);
+        ball.mean[v] = float(ball.grid.Position(i, j, k).norm() - 0.17);
+        for (int c = 0; c < 5; ++c) ball.components(v, c) *= 0.02f;
+      }
+  const ShapeLookup lookup(ball);
+  for (const double scale : {0.0, 1.0, -1.0}) {
+    const Eigen::VectorXd z = Eigen::VectorXd::Constant(5, scale);
+    const AlignedBox fast = lookup.InsideBox(z), full = InsideBoxByFullScan(lookup, z);
+    ASSERT_FALSE(full.IsEmpty());
+    EXPECT_EQ(fast.min, full.min);
+    EXPECT_EQ(fast.max, full.max);
+    EXPECT_GT(fast.min.x(), ball.grid.MinCorner().x() + 0.05);  // away from the border
+  }
+  // Nowhere inside: empty.
+  ShapeModel empty = ball;
+  for (int64_t v = 0; v < empty.NumVoxels(); ++v) empty.mean[v] = 1.0f;
+  EXPECT_TRUE(ShapeLookup(empty).InsideBox(Eigen::VectorXd::Zero(5)).IsEmpty());
+}
+
 TEST(ShapeLookup, DenseCacheFollowsTheCodeAndTheLookup) {
   const ShapeModel model_a = RandomModel(3, 11), model_b = RandomModel(3, 12);
   const ShapeLookup a(model_a), b(model_b);

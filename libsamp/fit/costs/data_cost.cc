@@ -43,8 +43,9 @@ double HuberPsi(double s, double k, double* d_psi) {
   return s > 0.0 ? root : -root;
 }
 
-double MixturePsi(double s, double s0, double* d_psi) {
-  const double c = std::exp(-0.5 * s0 * s0);
+double MixturePsi(double s, double s0, double* d_psi) { return MixturePsiWithC(s, std::exp(-0.5 * s0 * s0), d_psi); }
+
+double MixturePsiWithC(double s, double c, double* d_psi) {
   const double e = std::exp(-0.5 * s * s);
   if (s == 0.0) {
     if (d_psi) *d_psi = 1.0 / std::sqrt(1.0 + c);
@@ -94,6 +95,7 @@ DataCost::DataCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>
   camera_ = options.camera_in_world;
   outlier_threshold_ = options.outlier_threshold;
   SAMP_CHECK(!mixture_ || outlier_threshold_ > 0.0) << "DataCost: outlier_threshold must be > 0";
+  mixture_c_ = std::exp(-0.5 * outlier_threshold_ * outlier_threshold_);
   if (with_rays) {
     rays_.resize(3 * n);
     for (size_t i = 0; i < n; ++i) {

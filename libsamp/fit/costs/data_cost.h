@@ -65,6 +65,8 @@ struct DataCostOptions {
 double HuberPsi(double s, double k, double* d_psi);
 // The mixture psi with threshold s0 and d psi / ds (null: skipped).
 double MixturePsi(double s, double s0, double* d_psi);
+// The same with c = exp(-s0^2 / 2) given (hoisted out of a loop over points).
+double MixturePsiWithC(double s, double c, double* d_psi);
 
 // The camera centre in the object frame of pose (rotation (c, s) = R_y(theta)).
 void CameraInObject(const Eigen::Vector3d& camera, const double* pose, double c, double s, double* o_cam);
@@ -103,7 +105,7 @@ class DataCost : public ceres::CostFunction {
 
   // The robustifier chosen by the options (mixture or Huber) at s.
   double Robust(double s, double* d_psi) const {
-    return mixture_ ? MixturePsi(s, outlier_threshold_, d_psi) : HuberPsi(s, huber_, d_psi);
+    return mixture_ ? MixturePsiWithC(s, mixture_c_, d_psi) : HuberPsi(s, huber_, d_psi);
   }
 
   // What the rows of one evaluation at (z, pose) share: R, the rotation
@@ -155,22 +157,19 @@ class DataCost : public ceres::CostFunction {
     WriteJacobianRow(f, c, s, g, o, nr, dz_row, pose_row);
   }
 
-  // EvaluateRows of a distance term (kPaper, kRayDepth): phi_z at each
-  // point's object-frame position o, passed through
-  // refine(i, at, &phi, o, g, dz_row) (RayDepthCost: to the distance along the
-  // ray; it may move o and rewrite g and dz_row), then WriteDistanceRow.
-  template <typename Refine>
+  // EvaluateRows of the paper's term (kPaper): phi_z and its derivatives at
+  // each point's object-frame position o, then WriteDistanceRow. (RayDepthCost
+  // has its own loop: phi at o first, the derivatives where the residual is taken.)
   bool DistanceRows(const double* z, const double* pose, int begin, int end, double* residuals, double* jz,
-                    int jz_stride, double* jp, int jp_stride, Refine&& refine) const {
+                    int jz_stride, double* jp, int jp_stride) const {
     const PoseFrame at = AtPose(z, pose);
     for (int row = 0; row < end - begin; ++row) {
       const int i = begin + row;
       double o[3], g[3];
       PointInObject(i, pose, at.c, at.s, o);
       double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
-      double phi = lookup_->EvaluateDense(at.phi_z, o, jp ? g : nullptr, dz_row);
+      const double phi = lookup_->EvaluateDense(at.phi_z, o, jp ? g : nullptr, dz_row);
       if (!std::isfinite(phi)) return false;
-      refine(i, at, &phi, o, g, dz_row);
       WriteDistanceRow(i, phi, at.c, at.s, g, o, at.nr, &residuals[row], dz_row,
                        jp ? jp + size_t(row) * jp_stride : nullptr);
     }
@@ -185,6 +184,7 @@ class DataCost : public ceres::CostFunction {
   double huber_ = 1.0;
   bool mixture_ = false;
   double outlier_threshold_ = 3.0;
+  double mixture_c_ = 0.0;    // exp(-outlier_threshold^2 / 2), the mixture's c
   double sqrt_weight_ = 1.0;  // sqrt(w / N)
 };
 

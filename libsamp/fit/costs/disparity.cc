@@ -7,6 +7,17 @@
 
 namespace samp {
 
+namespace {
+constexpr double kMinAxisCosine = 1e-3;
+}  // namespace
+
+bool InFrontOfCamera(const Eigen::Vector3d& point, const Eigen::Vector3d& camera_in_world,
+                     const Eigen::Vector3d& camera_axis_in_world) {
+  const Eigen::Vector3d ray = point - camera_in_world;
+  const double length = ray.norm();
+  return length > 0.0 && ray.dot(camera_axis_in_world) / length > kMinAxisCosine;
+}
+
 DisparityCost::DisparityCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
                              const std::vector<double>& sigmas, const DataCostOptions& options)
     : DataCost(lookup, points_in_world, sigmas, options, /*with_rays=*/true) {
@@ -24,7 +35,8 @@ DisparityCost::DisparityCost(const ShapeLookup* lookup, const std::vector<Eigen:
     const Eigen::Vector3d ray = points_in_world[i] - options.camera_in_world;
     ray_lengths_[i] = ray.norm();
     axis_cosines_[i] = ray.dot(options.camera_axis_in_world) / ray_lengths_[i];
-    SAMP_CHECK(axis_cosines_[i] > 1e-3) << "DisparityCost: point " << i << " is not in front of the camera";
+    SAMP_CHECK(axis_cosines_[i] > kMinAxisCosine)
+        << "DisparityCost: point " << i << " is not in front of the camera (the fit drops such points)";
     const double depth = axis_cosines_[i] * ray_lengths_[i];
     inv_silhouette_sigmas_[i] = options.focal_px / (depth * options.silhouette_sigma_px);
   }
@@ -69,7 +81,7 @@ bool DisparityCost::EvaluateRows(const double* z, const double* pose, int begin,
     const RayResidual ray = Residual(i, at.phi_z, at.o_cam, u, &m, o, jp ? g : nullptr, dz_row);
     if (!std::isfinite(ray.value)) return false;
     double d_psi = 1.0;
-    residuals[row] = sqrt_weight_ * MixturePsi(ray.value, outlier_threshold_, &d_psi);
+    residuals[row] = sqrt_weight_ * MixturePsiWithC(ray.value, mixture_c_, &d_psi);
     const double f = sqrt_weight_ * d_psi * m;
     WriteJacobianRow(f, at.c, at.s, g, o, at.nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
   }

@@ -39,10 +39,17 @@ struct RayResidual {
   double value = 0.0;    // s_i before the robustifier (hit: disparity error / sigma_disp; miss: clearance / sigma_sil)
 };
 
+// Whether the disparity term can use a point: in front of the camera, its
+// unit ray u from the camera centre at u . axis > 1e-3 (a positive depth).
+// The fit drops the candidates that are not and counts them
+// (FitSummary::num_points_behind_camera); DisparityCost refuses them.
+bool InFrontOfCamera(const Eigen::Vector3d& point, const Eigen::Vector3d& camera_in_world,
+                     const Eigen::Vector3d& camera_axis_in_world);
+
 class DisparityCost : public DataCost {
  public:
   // `lookup` must outlive the cost. points and sigmas have equal, non-zero
-  // size; every point in front of the camera; options.focal_px > 0.
+  // size; every point in front of the camera (InFrontOfCamera); options.focal_px > 0.
   DisparityCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
                 const std::vector<double>& sigmas, const DataCostOptions& options);
 

@@ -36,14 +36,6 @@ class RayDepthCost : public DataCost {
 
   bool EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals, double* jz,
                     int jz_stride, double* jp, int jp_stride) const override;
-
- private:
-  // The signed ray distance of the object-frame point o (phi = phi_z(o) != 0)
-  // on the object-frame ray u: true with *phi the signed distance, o, g and
-  // dz_row (when given) moved to the crossing and scaled by m; false when the
-  // ray passes the shape (all left as phi's at o).
-  bool ToRayDistance(const double* phi_z, const double* o_cam, const double* u, double* phi, double* o, double* g,
-                     double* dz_row) const;
 };
 
 }  // namespace samp

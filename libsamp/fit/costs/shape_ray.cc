@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "libsamp/core/error.h"
+
 namespace samp {
 
 namespace {
@@ -123,7 +125,7 @@ bool RayDistance(const ShapeLookup& lookup, const double* phi_z, const double* o
 }
 
 bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double* o_cam, const double* u,
-                   double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss) {
+                   double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss, double max_lambda) {
   const GridSpec& grid = lookup.grid();
   auto finish_miss = [&](double l) {
     *lambda = l;
@@ -157,6 +159,7 @@ bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double*
     ++count;
     if (v < 0.0) break;
     if (l >= leave || count > kMaxTraceSteps) break;
+    if (l > max_lambda) return false;  // positive beyond max_lambda: any crossing lies beyond it
     l = std::min(l + std::max(v, min_step), leave);
   }
   if (vs[count - 1] < 0.0 && count >= 2) {
@@ -174,6 +177,122 @@ bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double*
   }
   const double a = ls[std::max(best - 1, 0)], b = ls[std::min(best + 1, count - 1)];
   return finish_miss(ClosestApproach(lookup, phi_z, o_cam, u, a, b, ls[best], vs[best]));
+}
+
+void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQuery* rays, int n) {
+  SAMP_CHECK(n >= 0 && n <= kRayBatch) << "RayDistances: " << n << " rays, at most " << kRayBatch;
+  const double min_step = 0.5 * lookup.grid().voxel_size;
+  struct March {
+    double sign, direction[3], lo, phi_lo, hi, phi_hi, limit;
+    int steps;
+    bool active, failed;
+  } m[kRayBatch];
+  auto same_side = [](double sign, double v) { return sign < 0.0 ? v < 0.0 : v > 0.0; };
+  int active = 0;
+  for (int r = 0; r < n; ++r) {
+    March& a = m[r];
+    RayDistanceQuery& q = rays[r];
+    a.sign = q.phi_o < 0.0 ? -1.0 : 1.0;  // inside: towards the camera
+    for (int k = 0; k < 3; ++k) a.direction[k] = a.sign * q.u[k];
+    a.lo = a.hi = 0.0;
+    a.phi_lo = a.phi_hi = q.phi_o;
+    a.limit = kMaxRayRatio * std::abs(q.phi_o);
+    a.steps = 0;
+    a.failed = false;
+    a.active = same_side(a.sign, a.phi_hi) && a.hi <= a.limit;
+    active += a.active;
+  }
+  // Sphere tracing, one step of every active ray per round (RayDistance's loop).
+  while (active > 0) {
+    active = 0;
+    for (int r = 0; r < n; ++r) {
+      March& a = m[r];
+      if (!a.active) continue;
+      a.lo = a.hi;
+      a.phi_lo = a.phi_hi;
+      a.hi = a.lo + std::max(std::abs(a.phi_lo), min_step);
+      double p[3];
+      PointOnRay(rays[r].o, a.direction, a.hi, p);
+      a.phi_hi = lookup.EvaluateDenseValue(phi_z, p);
+      ++a.steps;
+      if (!std::isfinite(a.phi_hi)) {
+        a.failed = true;
+        a.active = false;
+        continue;
+      }
+      a.active = a.steps < kMaxMarchSteps && same_side(a.sign, a.phi_hi) && a.hi <= a.limit;
+      active += a.active;
+    }
+  }
+  for (int r = 0; r < n; ++r) {
+    const March& a = m[r];
+    RayDistanceQuery& q = rays[r];
+    q.found = false;
+    if (a.failed || same_side(a.sign, a.phi_hi)) continue;
+    double v;
+    const double d = RefineCrossing(lookup, phi_z, q.o, a.direction, a.lo, a.hi, a.phi_lo, a.phi_hi, q.c, q.g_c, &v);
+    if (d > a.limit) continue;
+    if (!(q.g_c[0] * q.u[0] + q.g_c[1] * q.u[1] + q.g_c[2] * q.u[2] < -kMinRaySlope)) continue;
+    q.distance = d;
+    q.found = true;
+  }
+}
+
+void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double* o_cam, FirstCrossingQuery* rays,
+                    int n) {
+  SAMP_CHECK(n >= 0 && n <= kRayBatch) << "FirstCrossings: " << n << " rays, at most " << kRayBatch;
+  const double min_step = 0.5 * lookup.grid().voxel_size;
+  struct Trace {
+    double l, leave, last_l, last_v, prev_l, prev_v;
+    int count;
+    bool active, bracketed;
+  } t[kRayBatch];
+  int active = 0;
+  for (int r = 0; r < n; ++r) {
+    Trace& a = t[r];
+    a.count = 0;
+    a.bracketed = false;
+    a.last_l = a.last_v = a.prev_l = a.prev_v = 0.0;
+    // A ray passing the grid box misses (FirstCrossing's closest approach is
+    // not needed without refine_miss).
+    a.active = GridBoxSpan(lookup.grid(), o_cam, rays[r].u, &a.l, &a.leave);
+    active += a.active;
+  }
+  // Sphere tracing from the box entry, one sample of every active ray per
+  // round (FirstCrossing's loop, stopping after the first sample beyond max_lambda).
+  while (active > 0) {
+    active = 0;
+    for (int r = 0; r < n; ++r) {
+      Trace& a = t[r];
+      if (!a.active) continue;
+      double p[3];
+      PointOnRay(o_cam, rays[r].u, a.l, p);
+      const double v = lookup.EvaluateDenseValue(phi_z, p);
+      a.active = false;
+      if (!std::isfinite(v)) continue;
+      a.prev_l = a.last_l;
+      a.prev_v = a.last_v;
+      a.last_l = a.l;
+      a.last_v = v;
+      ++a.count;
+      if (v < 0.0) {
+        a.bracketed = a.count >= 2;  // inside at the box entry: a miss without refine_miss
+        continue;
+      }
+      if (a.l >= a.leave || a.count > kMaxTraceSteps || a.l > rays[r].max_lambda) continue;
+      a.l = std::min(a.l + std::max(v, min_step), a.leave);
+      a.active = true;
+      ++active;
+    }
+  }
+  for (int r = 0; r < n; ++r) {
+    const Trace& a = t[r];
+    FirstCrossingQuery& q = rays[r];
+    q.hit = a.bracketed;
+    if (!q.hit) continue;
+    double v;
+    q.lambda = RefineCrossing(lookup, phi_z, o_cam, q.u, a.prev_l, a.last_l, a.prev_v, a.last_v, q.c, q.g_c, &v);
+  }
 }
 
 }  // namespace samp

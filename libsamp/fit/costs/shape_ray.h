@@ -16,6 +16,8 @@
 // distance moves fast with the parameters.
 #pragma once
 
+#include <limits>
+
 #include "libsamp/model/shape_lookup.h"
 
 namespace samp {
@@ -34,7 +36,35 @@ bool RayDistance(const ShapeLookup& lookup, const double* phi_z, const double* o
 // caller clamps a grazing slope). Miss: *lambda = lambda* of the smallest phi
 // along the ray (c, g_c there, *phi_min = phi(c)), false; without refine_miss
 // a miss that needs the search returns false at once (c, g_c, *phi_min unset).
+// max_lambda (finite: only without refine_miss): the caller needs a crossing
+// at lambda < max_lambda only; the trace stops after its first sample beyond
+// it (any later crossing would lie beyond it too) and returns false.
 bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double* o_cam, const double* u,
-                   double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss = true);
+                   double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss = true,
+                   double max_lambda = std::numeric_limits<double>::infinity());
+
+// Batched forms for the ray-depth term: up to kRayBatch rays marched in
+// lockstep, one sample of every ray per round, so that the rays' independent
+// lookups overlap (a single ray's samples depend on each other). Each ray's
+// result equals the single-ray function's.
+constexpr int kRayBatch = 8;
+
+// RayDistance for each ray: in o, phi_o, u; out found, distance, c, g_c.
+struct RayDistanceQuery {
+  double o[3], phi_o, u[3];
+  bool found;
+  double distance, c[3], g_c[3];
+};
+void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQuery* rays, int n);
+
+// FirstCrossing(.., refine_miss = false, max_lambda) for each ray from one
+// camera centre: in u, max_lambda; out hit (lambda, c, g_c set only on a hit).
+struct FirstCrossingQuery {
+  double u[3], max_lambda;
+  bool hit;
+  double lambda, c[3], g_c[3];
+};
+void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double* o_cam, FirstCrossingQuery* rays,
+                    int n);
 
 }  // namespace samp
