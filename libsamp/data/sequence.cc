@@ -138,6 +138,18 @@ bool IsKittiStereoCalibration(const std::string& path) {
 
 }  // namespace
 
+void ParseFrameRange(const std::string& range, SequenceOptions* options) {
+  const size_t dash = range.find('-');
+  auto number = [&](const std::string& text) {
+    SAMP_CHECK(!text.empty() && text.size() <= 6 && text.find_first_not_of("0123456789") == std::string::npos)
+        << "--frames '" << range << "': expected FIRST-LAST frame numbers (e.g. 100-300)";
+    return std::stoi(text);
+  };
+  options->first_frame = number(range.substr(0, dash));
+  options->last_frame = dash == std::string::npos ? options->first_frame : number(range.substr(dash + 1));
+  SAMP_CHECK(options->first_frame <= options->last_frame) << "--frames '" << range << "': first after last";
+}
+
 std::vector<std::string> KittiStereoSequences(const std::string& root, const std::string& sequences) {
   std::error_code error;
   const fs::path calib = fs::path(root) / "calib_cam_to_cam";

@@ -96,6 +96,10 @@ SequenceFiles ListSequence(const std::string& directory);
 // list, numbers padded to six digits: "46" -> "000046"); throws naming what
 // is missing.
 std::vector<std::string> KittiStereoSequences(const std::string& root, const std::string& sequences);
+// "FIRST-LAST" (or "FIRST") frame numbers, as `samp fit --frames` and
+// `samp.batch fit --frames` take them, into options->first_frame and
+// last_frame. Throws samp::Error quoting the text when it is not that.
+void ParseFrameRange(const std::string& range, SequenceOptions* options);
 
 // One frame, read.
 struct SequenceFrame {

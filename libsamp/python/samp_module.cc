@@ -31,6 +31,8 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/ply_io.h"
+#include "libsamp/data/kitti_tracking.h"
+#include "libsamp/data/sequence.h"
 #include "libsamp/model/gram.h"
 #include "libsamp/model/manifold_projection.h"
 #include "libsamp/model/shape_model.h"
@@ -352,6 +354,26 @@ PYBIND11_MODULE(_samp, m) {
         WriteFitOutput(from, to);
       },
       py::arg("source"), py::arg("output_dir"));
+  m.def(
+      "kitti_tracking_sequence_folders",
+      [](const std::string& root, const std::string& sequences) {
+        return KittiTrackingSequenceFolders(root, sequences);
+      },
+      py::arg("root"), py::arg("sequences") = "all",
+      "KittiTrackingSequenceFolders (data/kitti_tracking.h): ROOT/image_02/<seq> of 'all' or a list.");
+  m.def(
+      "kitti_stereo_sequences",
+      [](const std::string& root, const std::string& sequences) { return KittiStereoSequences(root, sequences); },
+      py::arg("root"), py::arg("sequences") = "all",
+      "KittiStereoSequences (data/sequence.h): ROOT/calib_cam_to_cam/<seq>.txt of 'all' or a list.");
+  m.def(
+      "parse_frame_range",
+      [](const std::string& range) {
+        SequenceOptions o;
+        ParseFrameRange(range, &o);
+        return py::make_tuple(o.first_frame, o.last_frame);
+      },
+      py::arg("range"), "ParseFrameRange (data/sequence.h): 'FIRST-LAST' -> (first, last).");
   m.def(
       "sequence_output_name", [](const std::string& directory) { return SequenceOutputName(directory); },
       py::arg("directory"));

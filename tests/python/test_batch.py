@@ -173,6 +173,58 @@ def test_bad_arguments_exit_non_zero_with_the_field(tmp_path):
     assert p.returncode == 1 and "fit.no_such" in stderr
 
 
+def test_fit_of_a_kitti_tracking_folder_matches_samp_fit(tmp_path):
+    """--kitti-tracking ROOT --sequence all --frames --detections: one task per sequence of
+    KITTI tracking's own layout (written by samp synth --layout kitti-tracking), OUT/NAME
+    byte for byte what samp fit --kitti-tracking ROOT --sequence NAME writes."""
+    cad = tmp_path / "cad"
+    cad.mkdir()
+    for i, (l, h, w) in enumerate([(4.2, 1.5, 1.8), (3.9, 1.45, 1.7), (4.6, 1.6, 1.85)]):
+        write_box_obj(str(cad / ("box%d.obj" % i)), l, h, w)
+    kitti = str(tmp_path / "kitti")
+    r = subprocess.run([os.environ["SAMP_EXECUTABLE"], "synth", "--cad", str(cad), "--layout", "kitti-tracking",
+                        "--preset", "clean", "--sequences", "2", "--frames", "5", "--cars-per-sequence", "2",
+                        "--seed", "7", "-o", kitti, "-q"], capture_output=True, text=True, timeout=TIMEOUT)
+    assert r.returncode == 0, r.stderr
+    root = os.path.join(kitti, "training")
+    detections = os.path.join(kitti, "detections")
+    assert sorted(os.listdir(os.path.join(root, "image_02"))) == ["0000", "0001"]
+    out = str(tmp_path / "out")
+    source = ["--kitti-tracking", root, "--frames", "1-4", "--detections", detections]
+    p = batch(["fit", "--scheduler", "local", "--workers", "1", "--out", out, "--model", shipped_model(),
+               "--threads", "1", "--no-progress"] + source)
+    stdout, stderr = p.communicate(timeout=TIMEOUT)
+    assert p.returncode == 0, stderr
+    assert "2 sequence(s) (0 failed)" in stdout
+    assert sorted(os.listdir(out)) == ["0000", "0001"]
+    with open(os.path.join(out, "0000", "label_02", "0000.txt")) as f:
+        frames = {int(line.split()[0]) for line in f if line.strip()}
+    assert frames and min(frames) >= 1 and max(frames) <= 4
+    aside = str(tmp_path / "aside")
+    shutil.move(out, aside)
+    for name in ("0000", "0001"):
+        r = subprocess.run([os.environ["SAMP_EXECUTABLE"], "fit", "--model", shipped_model(), "--kitti-tracking",
+                            root, "--sequence", name, "--frames", "1-4", "--detections", detections, "--out",
+                            os.path.join(out, name), "--threads", "1"],
+                           capture_output=True, text=True, timeout=TIMEOUT)
+        assert r.returncode == 0, r.stderr
+        assert_same_files(tree_bytes(os.path.join(aside, name)), tree_bytes(os.path.join(out, name)), name)
+    # --sequence picks, and is refused without a KITTI source.
+    p = batch(["fit", "--scheduler", "local", "--workers", "1", "--out", str(tmp_path / "one"), "--model",
+               shipped_model(), "--threads", "1", "--no-progress", "--kitti-tracking", root, "--sequence", "1",
+               "--detections", detections, "--set", "fit.em_iterations=0"])
+    stdout, stderr = p.communicate(timeout=TIMEOUT)
+    assert p.returncode == 0, stderr
+    assert sorted(os.listdir(str(tmp_path / "one"))) == ["0001"]
+    p = batch(fit_args("local", root, str(tmp_path / "two")) + ["--sequence", "0001"])
+    _, stderr = p.communicate(timeout=TIMEOUT)
+    assert p.returncode == 2 and "--sequence names sequences of --kitti-tracking" in stderr
+    p = batch(["fit", "--scheduler", "local", "--out", str(tmp_path / "three"), "--model", shipped_model(),
+               "--kitti-tracking", root, "--frames", "9-3"])
+    _, stderr = p.communicate(timeout=TIMEOUT)
+    assert p.returncode == 1 and "--frames '9-3': first after last" in stderr
+
+
 # ------------------------------------------------------------------ train
 
 def write_box_obj(path, length, height, width):

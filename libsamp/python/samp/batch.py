@@ -2,11 +2,16 @@
 
     python3 -m samp.batch fit --scheduler ADDRESS|local --seq-root ROOT --out OUT \\
         --model MODEL.vdb [--threads N] [--config CONFIG.json] [--set fit.em_iterations=2 ...]
+    python3 -m samp.batch fit --scheduler ... --kitti-tracking ROOT [--sequence all|0004,0011] \\
+        [--frames 100-300] [--detections FILE|DIR] --out OUT --model MODEL.vdb
 
-Every sequence folder directly under ROOT (one with a calib/ folder) is one
-task: on a worker it runs RunFit, the function behind `samp fit`, with
-sequences = [ROOT/NAME] and output_dir = OUT/NAME, so OUT/NAME holds exactly
-what `samp fit --seq ROOT/NAME --out OUT/NAME [the same options]` writes (but
+Every sequence is one task: each folder directly under ROOT that has a calib/
+folder (--seq-root), or each sequence of a KITTI tracking or KITTI stereo
+folder in its own layout (--kitti-tracking, --kitti-stereo with --sequence,
+listed as samp fit lists them). On a worker the task runs RunFit, the
+function behind `samp fit`, with that one sequence and output_dir = OUT/NAME,
+so OUT/NAME holds exactly what `samp fit --seq ROOT/NAME --out OUT/NAME [the
+same options]` (or `samp fit --kitti-tracking ROOT --sequence NAME ...`) writes (but
 for the wall-clock times in tracks.json, which differ from run to run)
 (written into a temporary folder and renamed into place, so a worker that dies
 leaves no half-written output). Dask reschedules the task of a worker that
@@ -34,6 +39,24 @@ def list_sequences(root):
         if os.path.isdir(os.path.join(root, name, "calib")):
             names.append(name)
     return names
+
+
+def sequences_of_args(args):
+    """(name, input path) of every sequence the arguments name, in order: the folders
+    under --seq-root, or the sequences of --kitti-tracking / --kitti-stereo (--sequence)
+    as samp fit lists them (ROOT/image_02/<seq>, ROOT/calib_cam_to_cam/<seq>.txt)."""
+    if args.seq_root:
+        names = list_sequences(args.seq_root)
+        if not names:
+            raise _samp.Error("--seq-root %s holds no sequence folder (a folder with calib/)" % args.seq_root)
+        return [(n, os.path.join(args.seq_root, n)) for n in names]
+    if args.kitti_tracking:
+        paths = _samp.kitti_tracking_sequence_folders(args.kitti_tracking, args.sequence)
+    else:
+        paths = _samp.kitti_stereo_sequences(args.kitti_stereo, args.sequence)
+    if not paths:
+        raise _samp.Error("%s holds no sequence" % (args.kitti_tracking or args.kitti_stereo))
+    return [(_samp.sequence_output_name(p), p) for p in paths]
 
 
 def fit_task(options_json, seq_dir, out_dir):
@@ -92,6 +115,20 @@ def fit_options_from_args(args):
         options.fit.single_frame = True
     if args.link_only:
         options.link_only = True
+    if args.frames:
+        options.sequence.first_frame, options.sequence.last_frame = _samp.parse_frame_range(args.frames)
+    if args.detections or args.detection_format:
+        # Optional fields of config.json (written only when given): set on the tree.
+        tree = json.loads(options.native.to_json())
+        if args.detections:
+            tree["sequence"]["detections"] = os.path.abspath(args.detections)
+        if args.detection_format:
+            tree["sequence"]["detection_format"] = args.detection_format
+        options.native.from_json(json.dumps(tree))
+    if args.min_score is not None:
+        options.sequence.min_detection_score = args.min_score
+    if args.types:
+        options.sequence.object_types = [t for t in args.types.split(",") if t]
     for item in args.set or []:
         path, value = _parse_set(item)
         options._set(tuple(path), value)
@@ -102,12 +139,27 @@ def fit_options_from_args(args):
     return options
 
 
+# glibc malloc settings of the LocalCluster's worker processes. Dask's default
+# (distributed.nanny.pre-spawn-environ: MALLOC_TRIM_THRESHOLD_=65536) returns
+# every freed block above 64 KB to the kernel, and setting it also fixes the
+# mmap threshold at 128 KB: each model's and each sequence's large transient
+# buffers then come back as fresh pages, faulted in and zeroed one by one. On
+# the 2-core machine that made a training task 0.31 s against 0.25 s with
+# these values (docs/benchmarks.md, "samp.batch"). Variables already in the
+# environment take precedence (Dask's rule); docs/cluster.md says the same
+# for remote workers.
+WORKER_MALLOC_ENVIRON = {"MALLOC_TRIM_THRESHOLD_": str(64 << 20), "MALLOC_MMAP_THRESHOLD_": str(32 << 20)}
+
+
 def _client(args):
+    import dask
     from distributed import Client, LocalCluster
 
     if args.scheduler == "local":
-        cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
+        settings = {"distributed.nanny.pre-spawn-environ." + k: v for k, v in WORKER_MALLOC_ENVIRON.items()}
+        with dask.config.set(settings):
+            cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
+                                   dashboard_address=None)
         return Client(cluster), cluster
     return Client(args.scheduler, timeout=args.connect_timeout), None
 
@@ -137,9 +189,15 @@ def run_fit_batch(args, out=sys.stdout, err=sys.stderr):
     from distributed import as_completed
 
     options = fit_options_from_args(args)
-    names = list_sequences(args.seq_root)
-    if not names:
-        raise _samp.Error("--seq-root %s holds no sequence folder (a folder with calib/)" % args.seq_root)
+    sequences = sequences_of_args(args)
+    names = [n for n, _ in sequences]
+    inputs = dict(sequences)
+    if len(inputs) != len(names):
+        raise _samp.Error("two sequences share a name (%s): their outputs would collide in OUT" %
+                          ", ".join(sorted(set(n for n in names if names.count(n) > 1))))
+    if args.detections and len(names) > 1 and not os.path.isdir(args.detections):
+        raise _samp.Error("--detections %s is a file, but %d sequences are fitted: give a folder with "
+                          "<seq>.txt per sequence" % (args.detections, len(names)))
     os.makedirs(args.out, exist_ok=True)
     options_json = options.native.to_json()
     client, cluster = _client(args)
@@ -148,7 +206,7 @@ def run_fit_batch(args, out=sys.stdout, err=sys.stderr):
     try:
         futures = {}
         for name in names:
-            seq_dir = os.path.join(args.seq_root, name)
+            seq_dir = inputs[name]
             out_dir = os.path.join(args.out, name)
             future = client.submit(fit_task, options_json, seq_dir, out_dir, key="samp-fit-" + name + "-" +
                                    str(abs(hash((args.out, start)))), pure=False, retries=args.retries)
@@ -159,7 +217,7 @@ def run_fit_batch(args, out=sys.stdout, err=sys.stderr):
             try:
                 r = future.result()
             except Exception as e:  # the task could not run at all (e.g. samp not importable on a worker)
-                r = {"sequence": os.path.join(args.seq_root, name), "failure": "task failed: %s" % e,
+                r = {"sequence": inputs[name], "failure": "task failed: %s" % e,
                      "report": "", "num_tracks_fitted": 0, "num_tracks_failed": 0}
             results[name] = r
             failed += bool(r["failure"])
@@ -385,11 +443,25 @@ def run_train_batch(args, out=sys.stdout, err=sys.stderr):
 def build_parser():
     parser = argparse.ArgumentParser(prog="python3 -m samp.batch", description=__doc__.split("\n\n")[0])
     sub = parser.add_subparsers(dest="command", required=True)
-    fit = sub.add_parser("fit", help="fit every sequence under --seq-root, one `samp fit` output per sequence")
+    fit = sub.add_parser("fit", help="fit every sequence of a dataset, one `samp fit` output per sequence")
     fit.add_argument("--scheduler", required=True,
                      help="Dask scheduler address (tcp://HOST:8786) or 'local' (a LocalCluster on this machine)")
     fit.add_argument("--workers", type=int, default=2, help="workers of --scheduler local (processes)")
-    fit.add_argument("--seq-root", required=True, help="folder of sequence folders (each as for samp fit --seq)")
+    source = fit.add_mutually_exclusive_group(required=True)
+    source.add_argument("--seq-root", help="folder of sequence folders in samp's layout (each as for samp fit --seq)")
+    source.add_argument("--kitti-tracking", metavar="ROOT",
+                        help="KITTI tracking folder in its own layout (training/ or testing/), as samp fit's")
+    source.add_argument("--kitti-stereo", metavar="ROOT",
+                        help="KITTI stereo 2015 multiview folder in its own layout, as samp fit's")
+    fit.add_argument("--sequence", default="all",
+                     help="with --kitti-tracking / --kitti-stereo: sequences, comma-separated, or all (default)")
+    fit.add_argument("--frames", help="fit only frames FIRST-LAST (e.g. 100-300) of each sequence")
+    fit.add_argument("--detections", help="as samp fit --detections: a file (one sequence) or a folder "
+                                          "with <seq>.txt per sequence")
+    fit.add_argument("--detection-format", choices=["auto", "kitti-object", "kitti-tracking", "ab3dmot"],
+                     help="as samp fit --detection-format")
+    fit.add_argument("--min-score", type=float, help="as samp fit --min-score")
+    fit.add_argument("--types", help="as samp fit --types (comma-separated, default Car)")
     fit.add_argument("--out", required=True, help="output folder: OUT/NAME per sequence NAME")
     fit.add_argument("--model", help="shape model file (.vdb); required unless --config names one")
     fit.add_argument("--config", help="config.json of an earlier samp fit: its fit/sequence options")
@@ -432,6 +504,8 @@ def main(argv=None):
         if args.command == "fit":
             if not args.model and not args.config:
                 parser.error("fit: give --model (or --config naming one)")
+            if args.seq_root and args.sequence != "all":
+                parser.error("fit: --sequence names sequences of --kitti-tracking or --kitti-stereo")
             return run_fit_batch(args)
         if args.command == "train":
             return run_train_batch(args)
