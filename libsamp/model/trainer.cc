@@ -9,6 +9,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -283,10 +285,15 @@ CanonicalizeResult CanonicalCad(const std::string& path, const CanonicalizeOptio
 ScannedSdf ScanToSdf(const Mesh& canonical_mesh, const ScanOptions& scan, const GridSpec& grid,
                      const SdfOptions& sdf) {
   ScannedSdf result;
-  result.scan = ScanMesh(canonical_mesh, scan);
-  SAMP_CHECK(result.scan.num_hits > 0) << "no scan ray hit the mesh";
-  result.sdf = ComputeSdf(canonical_mesh, result.scan, grid, sdf, /*parallel=*/true);
+  result.sdf = ScanToSdf(canonical_mesh, scan, grid, sdf, &result.scan);
   return result;
+}
+
+Sdf ScanToSdf(const Mesh& canonical_mesh, const ScanOptions& scan, const GridSpec& grid, const SdfOptions& sdf,
+              ScanResult* scan_result) {
+  ScanMesh(canonical_mesh, scan, scan_result);
+  SAMP_CHECK(scan_result->num_hits > 0) << "no scan ray hit the mesh";
+  return ComputeSdf(canonical_mesh, *scan_result, grid, sdf, /*parallel=*/true);
 }
 
 std::vector<TrainJob> ListTrainJobs(const TrainOptions& options) {
@@ -295,6 +302,55 @@ std::vector<TrainJob> ListTrainJobs(const TrainOptions& options) {
   if (has_manifest) manifest = LoadManifest(options.manifest_path);
   return AddSizeVariants(FindJobs(options, has_manifest ? &manifest : nullptr), options.size_variants);
 }
+
+namespace {
+
+// Scan results kept between models so that their images (~128 MB each at the
+// default scan) are reused, not allocated anew per model: a fresh page costs
+// the kernel a fault and a zeroing, and that was 40 % of a model's time
+// (docs/benchmarks.md, "samp.batch"). One result per model in flight: a lease
+// takes one (or a new one) and gives it back at its end. Not thread_local: the
+// SDF's nested TBB loops may run another model's job on the same thread while
+// one waits. The pool lives until the process ends; it holds as many results
+// as models ever ran at once (num_threads of samp train, 1 per Dask task thread).
+class ScanBuffers {
+ public:
+  class Lease {
+   public:
+    explicit Lease(ScanBuffers* pool) : pool_(pool), scan_(pool->Take()) {}
+    ~Lease() { pool_->Give(std::move(scan_)); }
+    Lease(const Lease&) = delete;
+    Lease& operator=(const Lease&) = delete;
+    ScanResult* get() const { return scan_.get(); }
+
+   private:
+    ScanBuffers* pool_;
+    std::unique_ptr<ScanResult> scan_;
+  };
+
+ private:
+  std::unique_ptr<ScanResult> Take() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (free_.empty()) return std::make_unique<ScanResult>();
+    std::unique_ptr<ScanResult> scan = std::move(free_.back());
+    free_.pop_back();
+    return scan;
+  }
+  void Give(std::unique_ptr<ScanResult> scan) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    free_.push_back(std::move(scan));
+  }
+
+  std::mutex mutex_;
+  std::vector<std::unique_ptr<ScanResult>> free_;
+};
+
+ScanBuffers& SharedScanBuffers() {
+  static ScanBuffers pool;
+  return pool;
+}
+
+}  // namespace
 
 TrainedShape TrainJobSdf(const TrainJob& job, const TrainOptions& options, std::vector<float>* values) {
   TrainedShape shape;
@@ -314,8 +370,8 @@ TrainedShape TrainJobSdf(const TrainJob& job, const TrainOptions& options, std::
     }
     shape.scale = canonical.scale;
     shape.size = canonical.size;
-    ScannedSdf scanned = ScanToSdf(canonical.mesh, options.scan, options.grid, options.sdf);
-    Sdf& sdf = scanned.sdf;
+    const ScanBuffers::Lease scan(&SharedScanBuffers());
+    Sdf sdf = ScanToSdf(canonical.mesh, options.scan, options.grid, options.sdf, scan.get());
     shape.inside_fraction = sdf.summary.inside_fraction;
     SAMP_CHECK(sdf.summary.sign_ok)
         << "sign failed: inside fraction " << sdf.summary.inside_fraction

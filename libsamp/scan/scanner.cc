@@ -57,6 +57,12 @@ Eigen::Isometry3d LookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& targ
 }  // namespace
 
 ScanResult ScanMesh(const Mesh& mesh, const ScanOptions& options) {
+  ScanResult result;
+  ScanMesh(mesh, options, &result);
+  return result;
+}
+
+void ScanMesh(const Mesh& mesh, const ScanOptions& options, ScanResult* result) {
   options.Check();
   SAMP_CHECK(!mesh.Empty()) << "ScanMesh: the mesh is empty";
   const AlignedBox box = mesh.Bounds();
@@ -76,17 +82,18 @@ ScanResult ScanMesh(const Mesh& mesh, const ScanOptions& options) {
   camera.cx = 0.5 * (options.width - 1);
   camera.cy = 0.5 * (options.height - 1);
 
-  ScanResult result;
-  result.triangle_seen.assign(mesh.triangles.size(), 0);
-  result.views.reserve(options.num_views);
+  result->triangle_seen.assign(mesh.triangles.size(), 0);
+  result->num_rays = result->num_hits = 0;
+  result->views.resize(options.num_views);  // kept views keep their images' capacity
   const int64_t num_pixels = int64_t(options.width) * options.height;
   const double distance = options.distance_factor * radius;
-  for (const Eigen::Vector3d& direction : FibonacciSphere(options.num_views)) {
-    const Eigen::Isometry3d object_from_camera = LookAt(center + distance * direction, center);
-    ScanView view;
+  const std::vector<Eigen::Vector3d> directions = FibonacciSphere(options.num_views);
+  for (int index = 0; index < options.num_views; ++index) {
+    const Eigen::Isometry3d object_from_camera = LookAt(center + distance * directions[index], center);
+    ScanView& view = result->views[index];
     view.camera = camera;
     view.camera_from_object = object_from_camera.inverse();
-    view.depth.resize(num_pixels);
+    view.depth.resize(num_pixels);  // every pixel is written below
     view.triangle.resize(num_pixels);
     EmbreeScene::ImageOutputs outputs;
     outputs.depth = view.depth.data();
@@ -94,13 +101,11 @@ ScanResult ScanMesh(const Mesh& mesh, const ScanOptions& options) {
     scene.IntersectCameraImage(camera, object_from_camera, 0, options.height, outputs);
     for (const int32_t triangle : view.triangle) {
       if (triangle < 0) continue;
-      result.triangle_seen[triangle] = 1;
-      ++result.num_hits;
+      result->triangle_seen[triangle] = 1;
+      ++result->num_hits;
     }
-    result.num_rays += num_pixels;
-    result.views.push_back(std::move(view));
+    result->num_rays += num_pixels;
   }
-  return result;
 }
 
 PointCloud ScanResult::SurfacePoints() const {

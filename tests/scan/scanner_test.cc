@@ -109,6 +109,39 @@ TEST(ScanMesh, OpenBoxSeesTheInsideThroughTheOpening) {
   EXPECT_EQ(std::accumulate(result.triangle_seen.begin(), result.triangle_seen.end(), 0), 10);
 }
 
+void ExpectSameScan(const ScanResult& a, const ScanResult& b) {
+  EXPECT_EQ(a.num_rays, b.num_rays);
+  EXPECT_EQ(a.num_hits, b.num_hits);
+  EXPECT_EQ(a.triangle_seen, b.triangle_seen);
+  ASSERT_EQ(a.views.size(), b.views.size());
+  for (size_t v = 0; v < a.views.size(); ++v) {
+    EXPECT_TRUE(a.views[v].camera_from_object.matrix() == b.views[v].camera_from_object.matrix());
+    EXPECT_EQ(a.views[v].camera.width, b.views[v].camera.width);
+    EXPECT_EQ(a.views[v].depth, b.views[v].depth) << "view " << v;
+    EXPECT_EQ(a.views[v].triangle, b.views[v].triangle) << "view " << v;
+  }
+}
+
+// The reusing overload (what training calls per model) overwrites everything:
+// after a scan of another mesh with more and larger views it gives the fresh
+// scan's result exactly, and it keeps the buffers it reuses.
+TEST(ScanMesh, ReusedResultEqualsAFreshScan) {
+  const Mesh sphere = MakeSphereMesh(Eigen::Vector3d(0, 0, 0), 0.8, 16, 32);
+  const Mesh box = MakeBoxMesh(Eigen::Vector3d(-2, -0.7, -0.9), Eigen::Vector3d(2, 0.7, 0.9));
+  ScanOptions big = SmallScan();
+  big.num_views = 40;
+  big.width = big.height = 120;
+  ScanResult reused;
+  ScanMesh(sphere, big, &reused);
+  ExpectSameScan(reused, ScanMesh(sphere, big));
+  const float* first_depth = reused.views[0].depth.data();
+  ScanMesh(box, SmallScan(), &reused);
+  ExpectSameScan(reused, ScanMesh(box, SmallScan()));
+  EXPECT_EQ(reused.views[0].depth.data(), first_depth);  // shrunk in place, not re-allocated
+  ScanMesh(sphere, big, &reused);
+  ExpectSameScan(reused, ScanMesh(sphere, big));
+}
+
 TEST(ScanMesh, OptionsAreChecked) {
   const Mesh box = MakeBoxMesh(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1, 1, 1));
   ScanOptions options = SmallScan();
