@@ -82,33 +82,55 @@ void WritePly(const std::string& path, const PointCloud& cloud) {
 
 PlyHeader ReadPlyHeader(std::istream& in, const std::string& what) {
   PlyHeader header;
+  int number = 1;  // the "ply" line
   for (std::string line; std::getline(in, line);) {
+    ++number;
     if (!line.empty() && line.back() == '\r') line.pop_back();
     if (line == "end_header") {
       header.complete = true;
       break;
     }
+    const std::string at = what + ": PLY header line " + std::to_string(number);
+    SAMP_CHECK(std::all_of(line.begin(), line.end(), [](char c) { return c == '\t' || (c >= ' ' && c <= '~'); }))
+        << at << " has a byte that is not printable ASCII";
     std::istringstream words(line);
-    std::string keyword;
-    words >> keyword;
-    if (keyword == "format") {
-      words >> header.format;
-    } else if (keyword == "element") {
+    std::vector<std::string> w;
+    for (std::string word; words >> word;) w.push_back(word);
+    if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
+    if (w[0] == "format") {
+      SAMP_CHECK(w.size() == 3 && (w[1] == "ascii" || w[1] == "binary_little_endian" || w[1] == "binary_big_endian"))
+          << at << ": expected 'format ascii|binary_little_endian|binary_big_endian VERSION', got '" << line << "'";
+      header.format = w[1];
+    } else if (w[0] == "element") {
+      SAMP_CHECK(w.size() == 3) << at << ": expected 'element NAME COUNT', got '" << line << "'";
       PlyElement element;
-      std::string number;
-      words >> element.name >> number;
-      SAMP_CHECK(!number.empty() &&
-                 std::all_of(number.begin(), number.end(), [](char d) { return d >= '0' && d <= '9'; }))
-          << what << ": PLY element '" << element.name << "' has count '" << number << "', not a number";
-      for (size_t k = 0; k < number.size(); ++k)  // at most 18 digits kept; more saturate
-        element.count = k < 18 ? element.count * 10 + uint64_t(number[k] - '0') : uint64_t(1) << 62;
+      element.name = w[1];
+      const std::string& count = w[2];
+      SAMP_CHECK(std::all_of(count.begin(), count.end(), [](char d) { return d >= '0' && d <= '9'; }))
+          << what << ": PLY element '" << element.name << "' has count '" << count << "', not a number";
+      for (size_t k = 0; k < count.size(); ++k)  // at most 18 digits kept; more saturate
+        element.count = k < 18 ? element.count * 10 + uint64_t(count[k] - '0') : uint64_t(1) << 62;
       header.elements.push_back(std::move(element));
-    } else if (keyword == "property" && !header.elements.empty()) {
+    } else if (w[0] == "property") {
+      SAMP_CHECK(!header.elements.empty()) << at << ": a property before any element";
       PlyProperty property;
-      words >> property.type;
-      if (property.type == "list") words >> property.count_type >> property.type;
-      words >> property.name;
+      if (w.size() == 5 && w[1] == "list") {
+        property.count_type = w[2];
+        property.type = w[3];
+        property.name = w[4];
+        PlyScalarBytes(property.count_type, at);
+      } else {
+        SAMP_CHECK(w.size() == 3 && w[1] != "list")
+            << at << ": expected 'property TYPE NAME' or 'property list COUNT_TYPE TYPE NAME', got '" << line
+            << "'";
+        property.type = w[1];
+        property.name = w[2];
+      }
+      PlyScalarBytes(property.type, at);  // throws for a name that is no PLY type
       header.elements.back().properties.push_back(std::move(property));
+    } else {
+      SAMP_THROW() << at << ": unknown keyword '" << w[0] << "' (expected format, comment, obj_info, element, "
+                   << "property or end_header)";
     }
   }
   return header;

@@ -40,8 +40,12 @@ struct PlyHeader {
 };
 
 // Reads header lines from `in` (the "ply" line already read) up to and
-// including "end_header", or to the end of `in`. Throws samp::Error starting
-// with `what` (e.g. the file's path) when an element's count is not a number.
+// including "end_header", or to the end of `in`. Strict: throws samp::Error
+// starting with `what` (e.g. the file's path) and naming the line for a byte
+// that is not printable ASCII, an unknown keyword, a format, element or
+// property line of another shape, a type that is not a PLY type, a property
+// before any element, or an element count that is not a number. (assimp's
+// PLY reader loops forever on some such headers: tests/fuzz/regressions/mesh.)
 PlyHeader ReadPlyHeader(std::istream& in, const std::string& what);
 
 // Bytes of a PLY scalar type (char ... float64, int8 ... float64); throws

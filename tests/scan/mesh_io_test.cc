@@ -176,6 +176,29 @@ TEST(MeshIo, FaceWithoutIndicesIsAnErrorNotAnAbort) {
   fs::remove_all(dir);
 }
 
+// A garbled PLY header is refused by samp's header parser before assimp sees
+// it: assimp 5.2's PLY reader looped forever at the end of such a file
+// (libFuzzer; tests/fuzz/regressions/mesh/timeout-assimp-ply-garbled-header-loops-at-eof).
+TEST(MeshIo, GarbledPlyHeaderIsAnErrorNamingTheLine) {
+  const fs::path dir = test::TempDir("ply_garbled");
+  const std::string start = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                            "property float z\n";
+  const std::string body = "end_header\n0 0 0\n1 0 0\n0 1 0\n";
+  test::WriteText(dir / "keyword.ply", start + "fa1ex_indices\n" + body);
+  test::ExpectError([&] { LoadMesh((dir / "keyword.ply").string()); },
+                    {"keyword.ply", "PLY header line 7", "unknown keyword 'fa1ex_indices'"});
+  test::WriteText(dir / "list.ply", start + "element face 1\nproperty list uchar int vertex_indices 0.;rt\n" + body);
+  test::ExpectError([&] { LoadMesh((dir / "list.ply").string()); },
+                    {"list.ply", "PLY header line 8", "expected 'property TYPE NAME' or 'property list"});
+  test::WriteText(dir / "type.ply", start + "element face 1\nproperty list uchar vepec vertex_indices\n" + body);
+  test::ExpectError([&] { LoadMesh((dir / "type.ply").string()); },
+                    {"type.ply", "PLY header line 8", "'vepec' is not a PLY type"});
+  test::WriteText(dir / "binary.ply", std::string("ply\nformat ascii 1.0\nele\x01 vertex 3\n") + body);
+  test::ExpectError([&] { LoadMesh((dir / "binary.ply").string()); },
+                    {"binary.ply", "PLY header line 3", "not printable ASCII"});
+  fs::remove_all(dir);
+}
+
 TEST(MeshIo, AppliesNodeTransforms) {
   // An AC3D file whose object is translated by its 'loc' (a node transform).
   const fs::path dir = test::TempDir("ac");
