@@ -110,7 +110,7 @@ struct ScannedSdf {
 ScannedSdf ScanToSdf(const Mesh& canonical_mesh, const ScanOptions& scan, const GridSpec& grid,
                      const SdfOptions& sdf);
 // The same, scanning into *scan_result and reusing its buffers (ScanMesh's
-// overload): TrainJobSdf keeps one per thread across models.
+// overload): TrainJobSdf leases one from a pool kept across models.
 Sdf ScanToSdf(const Mesh& canonical_mesh, const ScanOptions& scan, const GridSpec& grid, const SdfOptions& sdf,
               ScanResult* scan_result);
 
