@@ -114,14 +114,23 @@ void CheckOffHeaderFitsTheFile(const std::string& path, const std::string& text,
 // COUNT_TYPE INDEX_TYPE NAME" lines up to "end_header". A binary element
 // takes at least the sum of its scalar sizes plus each list's count size; an
 // ASCII one 2 bytes per property (a digit and a separator). A count that is
-// not a number, or a header without end_header in its first 64 KiB, is an
-// error here (assimp would guess).
+// not a number, a header without an end_header line in its first 64 KiB, or
+// an end_header without a line break after it, is an error here (assimp would
+// guess, or loop).
 void CheckPlyHeaderFitsTheFile(const std::string& path, const std::string& text, uint64_t file_bytes) {
   if (text.compare(0, 3, "ply") != 0) return;
   const std::string what = "cannot read mesh '" + path + "'";
-  const size_t end = text.find("end_header");
-  SAMP_CHECK(end != std::string::npos) << what << ": PLY header without end_header in its first " << text.size()
-                                       << " bytes";
+  const size_t line_start = text.find("\nend_header");
+  SAMP_CHECK(line_start != std::string::npos) << what << ": PLY header without end_header in its first "
+                                              << text.size() << " bytes";
+  const size_t end = line_start + 1;
+  // "end_header" ends its line (assimp 5.2 loops forever on an ASCII body
+  // that follows it on the same line).
+  const size_t after = end + 10;
+  const bool line_break = after >= text.size() || text[after] == '\n' ||
+                          (text[after] == '\r' && (after + 1 >= text.size() || text[after + 1] == '\n'));
+  SAMP_CHECK(line_break) << what << ": PLY 'end_header' is not followed by a line break (byte "
+                         << int(static_cast<unsigned char>(text[after])) << " after it)";
   std::istringstream lines(text.substr(0, end));
   std::string magic;
   std::getline(lines, magic);

@@ -196,6 +196,17 @@ TEST(MeshIo, GarbledPlyHeaderIsAnErrorNamingTheLine) {
   test::WriteText(dir / "binary.ply", std::string("ply\nformat ascii 1.0\nele\x01 vertex 3\n") + body);
   test::ExpectError([&] { LoadMesh((dir / "binary.ply").string()); },
                     {"binary.ply", "PLY header line 3", "not printable ASCII"});
+  // The body on the end_header line (a backspace for the line break): assimp
+  // 5.2 loops forever on it (found by libFuzzer).
+  test::WriteText(dir / "end.ply", start + "end_header\b0 0 0\n1 0 0\n0 1 0\n");
+  test::ExpectError([&] { LoadMesh((dir / "end.ply").string()); },
+                    {"end.ply", "'end_header' is not followed by a line break (byte 8"});
+  // end_header in a comment is not the header's end.
+  test::WriteText(dir / "comment.ply", "ply\nformat ascii 1.0\ncomment no end_header here\nelement vertex 3\n"
+                                       "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+                                       "property list uchar int vertex_indices\nend_header\r\n0 0 0\n1 0 0\n"
+                                       "0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(LoadMesh((dir / "comment.ply").string()).triangles.size(), 1u);
   fs::remove_all(dir);
 }
 
