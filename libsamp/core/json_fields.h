@@ -106,6 +106,17 @@ class OptionsJson {
       }
     }
   }
+  // Named, written only when it differs from `default_value` (as Optional).
+  template <typename E, typename ToName, typename FromName>
+  void OptionalNamed(const std::string& key, E& value, const E& default_value, ToName to_name, FromName from_name) {
+    if (writing()) {
+      if (!(value == default_value)) Named(key, value, to_name, from_name);
+    } else if (in_->Has(key)) {
+      Named(key, value, to_name, from_name);
+    } else {
+      value = default_value;
+    }
+  }
   template <typename S>
   void Nested(const std::string& key, S& options) {
     NestedWith(key, [&options](OptionsJson& io) { OptionFields(io, options); });

@@ -45,6 +45,15 @@ int ParseOptionInt(const std::string& text) {
   return int(value);
 }
 
+std::uint64_t ParseOptionUnsigned(const std::string& text) {
+  char* end = nullptr;
+  errno = 0;
+  const unsigned long long value = std::strtoull(text.c_str(), &end, 10);
+  SAMP_CHECK(!text.empty() && text[0] >= '0' && text[0] <= '9' && *end == '\0' && errno == 0)
+      << "'" << text << "' is not a whole number >= 0";
+  return std::uint64_t(value);
+}
+
 double ParseOptionDouble(const std::string& text) {
   char* end = nullptr;
   const double value = std::strtod(text.c_str(), &end);
@@ -61,6 +70,9 @@ std::string OptionInfo::Validate(const std::string& text) const {
         return "";
       case OptionKind::kInt:
         number = ParseOptionInt(text);
+        break;
+      case OptionKind::kUnsigned:
+        number = double(ParseOptionUnsigned(text));
         break;
       case OptionKind::kNumber:
         number = ParseOptionDouble(text);

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <sstream>
@@ -41,7 +42,7 @@ struct NumberRule {
   std::string Text() const;
 };
 
-enum class OptionKind { kFlag, kInt, kNumber, kText, kChoice };
+enum class OptionKind { kFlag, kInt, kUnsigned, kNumber, kText, kChoice };
 
 // A number as the docs and the messages show it (up to 6 significant digits).
 std::string FormatOptionNumber(double value);
@@ -133,25 +134,27 @@ class OptionTable {
     size_t index_;
   };
 
-  // bool, int, double or std::string members.
+  // bool, int, uint64_t (seeds), double or std::string members.
   template <typename T>
   Entry Add(const std::string& name, T S::*member, std::string help) {
-    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, int> || std::is_same_v<T, double> ||
-                      std::is_same_v<T, std::string>,
-                  "OptionTable::Add: bool, int, double or std::string");
+    static_assert(std::is_same_v<T, bool> || std::is_same_v<T, int> || std::is_same_v<T, std::uint64_t> ||
+                      std::is_same_v<T, double> || std::is_same_v<T, std::string>,
+                  "OptionTable::Add: bool, int, uint64_t, double or std::string");
     Field f = NewField(name, std::move(help));
-    f.info.kind = std::is_same_v<T, bool>        ? OptionKind::kFlag
-                  : std::is_same_v<T, int>       ? OptionKind::kInt
-                  : std::is_same_v<T, double>    ? OptionKind::kNumber
-                                                 : OptionKind::kText;
+    f.info.kind = std::is_same_v<T, bool>             ? OptionKind::kFlag
+                  : std::is_same_v<T, int>            ? OptionKind::kInt
+                  : std::is_same_v<T, std::uint64_t>  ? OptionKind::kUnsigned
+                  : std::is_same_v<T, double>         ? OptionKind::kNumber
+                                                      : OptionKind::kText;
     if constexpr (std::is_same_v<T, bool>) {
       f.flag = [member](S* s) { return &(s->*member); };
     }
-    if constexpr (std::is_same_v<T, int> || std::is_same_v<T, double>) {
+    if constexpr (std::is_same_v<T, int> || std::is_same_v<T, std::uint64_t> || std::is_same_v<T, double>) {
       f.number = [member](const S& s) { return double(s.*member); };
     }
     f.text = [member](const S& s) { return ValueText(s.*member); };
     f.set = [member](S* s, const std::string& text) { s->*member = ParseValue<T>(text); };
+    f.copy = [member](const S& from, S* to) { to->*member = from.*member; };
     json_.push_back([member, name](OptionsJson& io, S& s) { io(name, s.*member); });
     fields_.push_back(std::move(f));
     return Entry(this, fields_.size() - 1);
@@ -178,11 +181,25 @@ class OptionTable {
     f.info.choices = std::move(choices);
     f.text = [member, to_name](const S& s) { return std::string(to_name(s.*member)); };
     f.set = [member, from_name](S* s, const std::string& text) { s->*member = from_name(text); };
+    f.copy = [member](const S& from, S* to) { to->*member = from.*member; };
     json_.push_back([member, name, to_name, from_name](OptionsJson& io, S& s) {
       io.Named(name, s.*member, to_name, from_name);
     });
     fields_.push_back(std::move(f));
     return Entry(this, fields_.size() - 1);
+  }
+
+  // As AddChoice, but the JSON holds the field only when it differs from its
+  // default (as AddOptional).
+  template <typename E>
+  Entry AddOptionalChoice(const std::string& name, E S::*member, const char* (*to_name)(E),
+                          E (*from_name)(const std::string&), std::vector<std::string> choices, std::string help) {
+    Entry entry = AddChoice(name, member, to_name, from_name, std::move(choices), std::move(help));
+    const E default_value = S{}.*member;
+    json_.back() = [member, name, to_name, from_name, default_value](OptionsJson& io, S& s) {
+      io.OptionalNamed(name, s.*member, default_value, to_name, from_name);
+    };
+    return entry;
   }
 
   // The fields of a nested struct, as an object `name` in the JSON, with the
@@ -208,6 +225,7 @@ class OptionTable {
       if (c.number) f.number = [member, g = c.number](const S& s) { return g(s.*member); };
       f.text = [member, g = c.text](const S& s) { return g(s.*member); };
       f.set = [member, g = c.set](S* s, const std::string& text) { g(&(s->*member), text); };
+      f.copy = [member, g = c.copy](const S& from, S* to) { g(from.*member, &(to->*member)); };
       for (const auto& [text, holds] : c.rules) {
         f.rules.emplace_back(text, [member, h = holds](const S& s) { return h(s.*member); });
       }
@@ -228,6 +246,16 @@ class OptionTable {
         if (!holds(options)) Fail(f, options, text);
       }
     }
+  }
+
+  // Copies the field `name` (OptionInfo::name) from `from` to `to`; throws
+  // for a name the table does not have. (Options given on a command line
+  // laid over a preset: `samp synth --preset`.)
+  void Copy(const std::string& name, const S& from, S* to) const {
+    for (const Field& f : fields_) {
+      if (f.info.name == name) return f.copy(from, to);
+    }
+    SAMP_THROW() << struct_name_ << " has no option " << name;
   }
 
   // Every field for config.json's writer or reader (OptionsJson).
@@ -267,6 +295,7 @@ class OptionTable {
     std::function<double(const S&)> number;         // kInt, kNumber
     std::function<std::string(const S&)> text;      // the value as text
     std::function<void(S*, const std::string&)> set;  // parses text
+    std::function<void(const S&, S*)> copy;            // the field from one object to another
     std::vector<std::pair<std::string, std::function<bool(const S&)>>> rules;
   };
 
@@ -309,6 +338,7 @@ class OptionTable {
 
   static std::string ValueText(bool v) { return v ? "true" : "false"; }
   static std::string ValueText(int v) { return std::to_string(v); }
+  static std::string ValueText(std::uint64_t v) { return std::to_string(v); }
   static std::string ValueText(double v) { return FormatOptionNumber(v); }
   static std::string ValueText(const std::string& v) { return v; }
 
@@ -323,6 +353,7 @@ class OptionTable {
 // Parsing of command-line text (throws samp::Error for malformed text).
 bool ParseOptionBool(const std::string& text);
 int ParseOptionInt(const std::string& text);
+std::uint64_t ParseOptionUnsigned(const std::string& text);
 double ParseOptionDouble(const std::string& text);
 
 template <typename S>
@@ -330,6 +361,7 @@ template <typename T>
 T OptionTable<S>::ParseValue(const std::string& text) {
   if constexpr (std::is_same_v<T, bool>) return ParseOptionBool(text);
   if constexpr (std::is_same_v<T, int>) return ParseOptionInt(text);
+  if constexpr (std::is_same_v<T, std::uint64_t>) return ParseOptionUnsigned(text);
   if constexpr (std::is_same_v<T, double>) return ParseOptionDouble(text);
   if constexpr (std::is_same_v<T, std::string>) return text;
 }

@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
-#include <tuple>
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/pose.h"
 #include "libsamp/synth/procedural.h"
+#include "libsamp/synth/synth_option_table.h"
 
 namespace samp {
 namespace {
@@ -33,46 +33,7 @@ MarkovRates Rates(double p, double mean_run) {
 
 }  // namespace
 
-void DetectorModelOptions::Check() const {
-  auto non_negative = [](double value, const char* name) {
-    SAMP_CHECK(std::isfinite(value) && value >= 0.0) << "detector model: " << name << " must be >= 0 (is "
-                                                     << value << ")";
-  };
-  non_negative(ray_sigma_a, "ray_sigma_a");
-  non_negative(ray_sigma_b, "ray_sigma_b");
-  non_negative(ray_sigma_c, "ray_sigma_c");
-  non_negative(lateral_sigma_a, "lateral_sigma_a");
-  non_negative(lateral_sigma_b, "lateral_sigma_b");
-  non_negative(vertical_sigma, "vertical_sigma");
-  non_negative(size_sigma, "size_sigma");
-  non_negative(relative_size_sigma, "relative_size_sigma");
-  auto finite = [](double value, const char* name) {
-    SAMP_CHECK(std::isfinite(value)) << "detector model: " << name << " must be finite (is " << value << ")";
-  };
-  finite(height_bias, "height_bias");
-  finite(width_bias, "width_bias");
-  finite(length_bias, "length_bias");
-  finite(along_ray_bias, "along_ray_bias");
-  non_negative(yaw_sigma_deg_a, "yaw_sigma_deg_a");
-  non_negative(yaw_sigma_deg_b, "yaw_sigma_deg_b");
-  non_negative(correlation_frames, "correlation_frames");
-  non_negative(false_positives_per_frame, "false_positives_per_frame");
-  non_negative(box_sigma_px, "box_sigma_px");
-  SAMP_CHECK(flip_probability >= 0.0 && flip_probability < 1.0)
-      << "detector model: flip_probability must be in [0, 1)";
-  SAMP_CHECK(miss_probability >= 0.0 && miss_probability < 1.0)
-      << "detector model: miss_probability must be in [0, 1)";
-  for (const auto& [p, run, name] :
-       {std::tuple{flip_probability, flip_mean_run_frames, "flip_mean_run_frames"},
-        std::tuple{miss_probability, miss_mean_run_frames, "miss_mean_run_frames"}}) {
-    SAMP_CHECK(run == 0.0 || (run >= 1.0 && run >= p / (1.0 - p)))
-        << "detector model: " << name << " must be 0 (independent) or >= max(1, p / (1 - p)) frames (is "
-        << run << ")";
-  }
-  SAMP_CHECK(false_positive_mean_run_frames >= 1.0)
-      << "detector model: false_positive_mean_run_frames must be >= 1";
-  SAMP_CHECK(min_pixels >= 0) << "detector model: min_pixels must be >= 0";
-}
+void DetectorModelOptions::Check() const { DetectorModelOptionTable().Check(*this); }
 
 struct StereoDetectorModel::TrackState {
   explicit TrackState(uint64_t seed) : engine(seed) {}

@@ -6,6 +6,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/pose.h"
 #include "libsamp/synth/procedural.h"
+#include "libsamp/synth/synth_option_table.h"
 
 namespace samp {
 namespace {
@@ -32,25 +33,7 @@ double DistanceToGrid(double x, double period) {
 
 }  // namespace
 
-void StreetOptions::Check() const {
-  auto probability = [](double p, const char* name) {
-    SAMP_CHECK(p >= 0.0 && p <= 1.0) << "street: " << name << " must be in [0, 1] (is " << p << ")";
-  };
-  probability(two_lane_probability, "two_lane_probability");
-  probability(right_parking_probability, "right_parking_probability");
-  probability(left_parking_probability, "left_parking_probability");
-  probability(intersection_probability, "intersection_probability");
-  SAMP_CHECK(min_lane_width >= 2.5 && max_lane_width >= min_lane_width && max_lane_width <= 5.0)
-      << "street: need 2.5 <= min_lane_width <= max_lane_width <= 5";
-  SAMP_CHECK(kerb_height >= 0.0 && kerb_height <= 0.3) << "street: kerb_height must be in [0, 0.3] m";
-  SAMP_CHECK(min_sidewalk_width >= 1.0 && max_sidewalk_width >= min_sidewalk_width)
-      << "street: need 1 <= min_sidewalk_width <= max_sidewalk_width";
-  SAMP_CHECK(min_facade_distance >= min_sidewalk_width && max_facade_distance >= min_facade_distance)
-      << "street: need min_sidewalk_width <= min_facade_distance <= max_facade_distance";
-  SAMP_CHECK(clutter_spacing > 0.5) << "street: clutter_spacing must be > 0.5 m";
-  SAMP_CHECK(min_parked_gap >= 0.0 && max_parked_gap >= min_parked_gap)
-      << "street: need 0 <= min_parked_gap <= max_parked_gap";
-}
+void StreetOptions::Check() const { StreetOptionTable().Check(*this); }
 
 bool StreetLayout::Drivable(double x, double z) const {
   const double half = lanes_per_direction * lane_width;

@@ -19,6 +19,7 @@
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/synth/scene.h"
 #include "libsamp/synth/sequence_writer.h"
+#include "libsamp/synth/synth_option_table.h"
 
 namespace samp {
 
@@ -121,147 +122,14 @@ SynthOptions SynthOptions::Clean() {
 
 void SynthOptions::Check() const {
   SAMP_CHECK(!output_folder.empty()) << "synth: output_folder is empty";
-  SAMP_CHECK(num_sequences >= 1) << "synth: num_sequences must be >= 1";
-  SAMP_CHECK(first_sequence >= 0 && first_sequence + num_sequences <= 1000000)
-      << "synth: first_sequence must be in [0, 999999 - num_sequences]";
-  SAMP_CHECK(cars_per_sequence >= 1 && cars_per_sequence <= 20) << "synth: cars_per_sequence must be in [1, 20]";
-  SAMP_CHECK(num_frames >= 1 && num_frames <= 100) << "synth: num_frames must be in [1, 100]";
-  SAMP_CHECK(layout == SynthLayout::kSamp || first_sequence + num_sequences <= 10000)
-      << "synth: the KITTI tracking layout names sequences with 4 digits: first_sequence + num_sequences "
-         "must be <= 10000";
-  SAMP_CHECK(frame_rate_hz > 0) << "synth: frame_rate_hz must be > 0";
-  SAMP_CHECK(width >= 32 && height >= 32) << "synth: image size must be at least 32 x 32";
-  SAMP_CHECK(focal_px > 0 && baseline > 0) << "synth: focal_px and baseline must be > 0";
-  SAMP_CHECK(cx_px > 0 && cx_px < width && cy_px > 0 && cy_px < height)
-      << "synth: the principal point must lie inside the image";
-  SAMP_CHECK(camera_height > 0.5) << "synth: camera_height must be > 0.5 m";
-  SAMP_CHECK(min_distance >= 4.0 && max_distance > min_distance && max_distance <= 150.0)
-      << "synth: need 4 <= min_distance < max_distance <= 150";
-  SAMP_CHECK(min_speed > 0 && max_speed >= min_speed) << "synth: need 0 < min_speed <= max_speed";
-  SAMP_CHECK(min_turn_speed > 0 && max_turn_speed >= min_turn_speed)
-      << "synth: need 0 < min_turn_speed <= max_turn_speed";
-  SAMP_CHECK(min_yaw_rate > 0 && max_yaw_rate >= min_yaw_rate)
-      << "synth: need 0 < min_yaw_rate <= max_yaw_rate";
-  SAMP_CHECK(min_ego_speed >= 0 && max_ego_speed >= min_ego_speed)
-      << "synth: need 0 <= min_ego_speed <= max_ego_speed";
-  SAMP_CHECK(max_ego_yaw_rate >= 0) << "synth: max_ego_yaw_rate must be >= 0";
-  SAMP_CHECK(image_noise_sigma >= 0) << "synth: image_noise_sigma must be >= 0";
-  SAMP_CHECK(disparity_sigma_px >= 0 && car_disparity_sigma_px >= 0)
-      << "synth: disparity noise must be >= 0";
-  SAMP_CHECK(invalid_fraction >= 0 && outlier_fraction >= 0 && invalid_fraction + outlier_fraction <= 1)
-      << "synth: invalid_fraction and outlier_fraction must be >= 0 with sum <= 1";
-  SAMP_CHECK(parked_cars_per_sequence >= 0 && parked_cars_per_sequence <= 12)
-      << "synth: parked_cars_per_sequence must be in [0, 12]";
-  SAMP_CHECK(near_share >= 0 && near_share <= 1) << "synth: near_share must lie in [0, 1]";
-  SAMP_CHECK(standing_share >= 0 && turning_share >= 0 && standing_share + turning_share <= 1)
-      << "synth: standing_share and turning_share must be >= 0 with sum <= 1";
-  SAMP_CHECK(ego_pitch_sway_deg >= 0 && ego_roll_sway_deg >= 0 && ego_bounce >= 0 && ego_max_pitch_offset_deg >= 0)
-      << "synth: ego sway amplitudes must be >= 0";
-  SAMP_CHECK(min_sun_elevation_deg > 0 && max_sun_elevation_deg >= min_sun_elevation_deg &&
-             max_sun_elevation_deg <= 90)
-      << "synth: need 0 < min_sun_elevation_deg <= max_sun_elevation_deg <= 90";
-  SAMP_CHECK(paint_specular >= 0 && paint_shininess >= 1 && paint_fresnel_f0 >= 0 && paint_fresnel_f0 < 1 &&
-             glass_fresnel_f0 >= 0 && glass_fresnel_f0 < 1 && paint_texture >= 0 && window_interior_albedo >= 0 &&
-             window_interior_albedo <= 0.5)
-      << "synth: need paint_specular >= 0, paint_shininess >= 1, 0 <= paint/glass F0 < 1, paint_texture >= 0, "
-         "0 <= window_interior_albedo <= 0.5";
-  street.Check();
-  detector.Check();
+  SynthOptionTable().Check(*this);
 }
 
 std::string SynthOptions::ToJson() const {
-  nlohmann::json j = {
-      {"seed", seed},
-      {"num_sequences", num_sequences},
-      {"first_sequence", first_sequence},
-      {"cars_per_sequence", cars_per_sequence},
-      {"num_frames", num_frames},
-      {"frame_rate_hz", frame_rate_hz},
-      {"width", width},
-      {"height", height},
-      {"focal_px", focal_px},
-      {"cx_px", cx_px},
-      {"cy_px", cy_px},
-      {"baseline", baseline},
-      {"camera_height", camera_height},
-      {"min_distance", min_distance},
-      {"max_distance", max_distance},
-      {"min_speed", min_speed},
-      {"max_speed", max_speed},
-      {"min_turn_speed", min_turn_speed},
-      {"max_turn_speed", max_turn_speed},
-      {"min_yaw_rate", min_yaw_rate},
-      {"max_yaw_rate", max_yaw_rate},
-      {"min_ego_speed", min_ego_speed},
-      {"max_ego_speed", max_ego_speed},
-      {"max_ego_yaw_rate", max_ego_yaw_rate},
-      {"image_noise_sigma", image_noise_sigma},
-      {"disparity", disparity == DisparitySource::kStereoSgbm ? "sgbm" : "true+noise"},
-      {"disparity_sigma_px", disparity_sigma_px},
-      {"car_disparity_sigma_px", car_disparity_sigma_px},
-      {"invalid_fraction", invalid_fraction},
-      {"outlier_fraction", outlier_fraction},
-      {"scene", scene == SynthScene::kStreet ? "street" : "clean"},
-      {"parked_cars_per_sequence", parked_cars_per_sequence},
-      {"near_share", near_share},
-      {"standing_share", standing_share},
-      {"turning_share", turning_share},
-      {"ego_pitch_sway_deg", ego_pitch_sway_deg},
-      {"ego_roll_sway_deg", ego_roll_sway_deg},
-      {"ego_bounce", ego_bounce},
-      {"ego_max_pitch_offset_deg", ego_max_pitch_offset_deg},
-      {"min_sun_elevation_deg", min_sun_elevation_deg},
-      {"max_sun_elevation_deg", max_sun_elevation_deg},
-      {"paint_specular", paint_specular},
-      {"paint_shininess", paint_shininess},
-      {"paint_fresnel_f0", paint_fresnel_f0},
-      {"glass_fresnel_f0", glass_fresnel_f0},
-      {"paint_texture", paint_texture},
-      {"window_interior_albedo", window_interior_albedo},
-      {"shadows", shadows},
-      {"street",
-       {{"two_lane_probability", street.two_lane_probability},
-        {"min_lane_width", street.min_lane_width},
-        {"max_lane_width", street.max_lane_width},
-        {"right_parking_probability", street.right_parking_probability},
-        {"left_parking_probability", street.left_parking_probability},
-        {"kerb_height", street.kerb_height},
-        {"min_sidewalk_width", street.min_sidewalk_width},
-        {"max_sidewalk_width", street.max_sidewalk_width},
-        {"min_facade_distance", street.min_facade_distance},
-        {"max_facade_distance", street.max_facade_distance},
-        {"clutter_spacing", street.clutter_spacing},
-        {"intersection_probability", street.intersection_probability},
-        {"min_parked_gap", street.min_parked_gap},
-        {"max_parked_gap", street.max_parked_gap}}},
-      {"detector",
-       {{"ray_sigma_a", detector.ray_sigma_a},
-        {"ray_sigma_b", detector.ray_sigma_b},
-        {"ray_sigma_c", detector.ray_sigma_c},
-        {"lateral_sigma_a", detector.lateral_sigma_a},
-        {"lateral_sigma_b", detector.lateral_sigma_b},
-        {"vertical_sigma", detector.vertical_sigma},
-        {"size_sigma", detector.size_sigma},
-        {"relative_size_sigma", detector.relative_size_sigma},
-        {"yaw_sigma_deg_a", detector.yaw_sigma_deg_a},
-        {"yaw_sigma_deg_b", detector.yaw_sigma_deg_b},
-        {"flip_probability", detector.flip_probability},
-        {"flip_mean_run_frames", detector.flip_mean_run_frames},
-        {"miss_probability", detector.miss_probability},
-        {"miss_mean_run_frames", detector.miss_mean_run_frames},
-        {"correlation_frames", detector.correlation_frames},
-        {"false_positives_per_frame", detector.false_positives_per_frame},
-        {"false_positive_mean_run_frames", detector.false_positive_mean_run_frames},
-        {"box_sigma_px", detector.box_sigma_px},
-        {"min_pixels", detector.min_pixels}}}};
-  if (layout == SynthLayout::kKittiTracking) j["layout"] = "kitti-tracking";  // samp's: not written
-  // Written only when set, so that the files of the preset's own detector stay as they were.
-  nlohmann::json& d = j["detector"];
-  if (!detector.profile.empty()) d["profile"] = detector.profile;
-  if (detector.height_bias != 0.0) d["height_bias"] = detector.height_bias;
-  if (detector.width_bias != 0.0) d["width_bias"] = detector.width_bias;
-  if (detector.length_bias != 0.0) d["length_bias"] = detector.length_bias;
-  if (detector.along_ray_bias != 0.0) d["along_ray_bias"] = detector.along_ray_bias;
+  nlohmann::json j = nlohmann::json::object();
+  OptionsJson io(&j);
+  SynthOptions copy = *this;  // the writer only reads the fields
+  SynthOptionTable().Json(io, copy);
   return DumpJson(j, 2);
 }
 

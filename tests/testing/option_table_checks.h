@@ -23,12 +23,20 @@ inline std::string OtherValue(const OptionInfo& info) {
       return info.default_text == "true" ? "false" : "true";
     case OptionKind::kInt:
       return std::to_string(std::stoi(info.default_text) + 7);
+    case OptionKind::kUnsigned:
+      return std::to_string(std::stoull(info.default_text) + 7);
     case OptionKind::kNumber: {
+      // The first of a few others that the field's own rule admits.
       const double value = std::stod(info.default_text);
-      return FormatOptionNumber(value != 0.0 ? value * 0.75 : 0.25);
+      for (double other : {value != 0.0 ? value * 0.75 : 0.25, value * 1.25, value + 1.0, value - 0.5}) {
+        const std::string text = FormatOptionNumber(other);
+        if (other != value && info.Validate(text).empty()) return text;
+      }
+      break;
     }
     case OptionKind::kText:
     case OptionKind::kChoice:
+      if (info.choices.empty()) return info.default_text + "other";
       for (const std::string& c : info.choices) {
         if (c != info.default_text) return c;
       }

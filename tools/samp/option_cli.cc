@@ -11,6 +11,7 @@ namespace {
 const char* TypeName(OptionKind kind) {
   switch (kind) {
     case OptionKind::kInt:
+    case OptionKind::kUnsigned:
       return "INT";
     case OptionKind::kNumber:
       return "FLOAT";
@@ -125,7 +126,7 @@ void AddHelpOptions(CLI::App* command, const std::vector<OptionList>& lists) {
             }
             throw CLI::Success();
           },
-          "Print a table of options as Markdown (docs/fitting.md) and exit")
+          "Print the option list of the docs (a Markdown table) and exit")
       ->check(CLI::IsMember(formats))
       ->trigger_on_parse();
 }
