@@ -6,23 +6,12 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/util.h"
+#include "libsamp/data/observation_option_table.h"
 #include "libsamp/data/stereo.h"
 
 namespace samp {
 
-void ObservationOptions::Check() const {
-  SAMP_CHECK(box_margin >= 0 && box_margin <= 2)
-      << "ObservationOptions.box_margin = " << box_margin << " must be in [0, 2]";
-  SAMP_CHECK(std::isfinite(min_height_above_road))
-      << "ObservationOptions.min_height_above_road must be finite";
-  SAMP_CHECK(max_distance_to_detection > 0)
-      << "ObservationOptions.max_distance_to_detection must be > 0";
-  SAMP_CHECK(std::isfinite(depth_gate_sigmas) && depth_gate_sigmas >= 0)
-      << "ObservationOptions.depth_gate_sigmas must be >= 0";
-  SAMP_CHECK(min_disparity_px > 0) << "ObservationOptions.min_disparity_px must be > 0";
-  SAMP_CHECK(sigma_disparity_px > 0) << "ObservationOptions.sigma_disparity_px must be > 0";
-  SAMP_CHECK(max_points_per_frame >= 0) << "ObservationOptions.max_points_per_frame must be >= 0";
-}
+void ObservationOptions::Check() const { ObservationOptionTable().Check(*this); }
 
 Eigen::Vector4d TransformPlane(const Eigen::Vector4d& plane_in_a, const Eigen::Isometry3d& b_from_a) {
   const Eigen::Vector3d normal_in_b = b_from_a.linear() * plane_in_a.head<3>();

@@ -32,18 +32,6 @@ void OptionFields(OptionsJson& io, RoadPlaneOptions& o) {
   io("seed", o.seed);
 }
 
-void OptionFields(OptionsJson& io, ObservationOptions& o) {
-  io("box_margin", o.box_margin);
-  io("min_height_above_road", o.min_height_above_road);
-  io("max_distance_to_detection", o.max_distance_to_detection);
-  io("depth_gate_sigmas", o.depth_gate_sigmas);
-  io("min_disparity_px", o.min_disparity_px);
-  io("sigma_disparity_px", o.sigma_disparity_px);
-  io("max_points_per_frame", o.max_points_per_frame);
-  io("seed", o.seed);
-  io("nearest_box_claims", o.nearest_box_claims);
-}
-
 void OptionFields(OptionsJson& io, SequenceOptions& o) {
   io.Nested("stereo", o.stereo);
   io.Nested("road_plane", o.road_plane);

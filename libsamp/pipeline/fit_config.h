@@ -8,6 +8,7 @@
 #include <string>
 
 #include "libsamp/core/json_fields.h"
+#include "libsamp/data/observation_option_table.h"
 #include "libsamp/fit/fit_option_table.h"
 #include "libsamp/pipeline/run_fit.h"
 
@@ -15,8 +16,7 @@ namespace samp {
 
 void OptionFields(OptionsJson& io, StereoOptions& o);
 void OptionFields(OptionsJson& io, RoadPlaneOptions& o);
-void OptionFields(OptionsJson& io, ObservationOptions& o);
-// TrackerOptions: data/tracking.h.
+// ObservationOptions: data/observation_option_table.h; TrackerOptions: data/tracking.h.
 void OptionFields(OptionsJson& io, SequenceOptions& o);
 // MotionNoise, FitOptions: fit/fit_option_table.h (their option tables).
 void OptionFields(OptionsJson& io, RunFitOptions& o);

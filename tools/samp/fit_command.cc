@@ -10,6 +10,7 @@
 #include "libsamp/core/log.h"
 #include "libsamp/pipeline/run_fit.h"
 #include "libsamp/data/kitti_tracking.h"
+#include "libsamp/data/observation_option_table.h"
 #include "libsamp/data/sequence.h"
 #include "libsamp/data/tracker_option_table.h"
 #include "libsamp/fit/fit_option_table.h"
@@ -109,18 +110,10 @@ void RegisterFitCommand(CLI::App* app) {
   AddListOption(command, tracker, "--tracker-vertical-sigma", {"vertical_sigma_a", "vertical_sigma_b"},
                 "Detector vertical std. dev. a,b: a + b d (m)", tracker_group);
   AddHelpOptions(command, {{"markdown", FitOptionTable().Describe(), ""},
-                           {"tracker-markdown", TrackerOptionTable().Describe(), "tracker-"}});
-  command->add_option("--sigma-disparity", o.sequence.observations.sigma_disparity_px,
-                      "Disparity noise for sigma_d = d^2 sigma / (b f), px")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
-  command->add_flag("!--shared-points", o.sequence.observations.nearest_box_claims,
-                    "Every track keeps every point of its 2D box (the paper); default: a point nearer to another "
-                    "detection's 3D box of the same frame is that car's (docs/fitting.md, \"Association\")");
-  command->add_option("--max-points", o.sequence.observations.max_points_per_frame,
-                      "At most this many candidate points per frame (seeded subsample; 0 = all)")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+                           {"tracker-markdown", TrackerOptionTable().Describe(), "tracker-"},
+                           {"observation-markdown", ObservationOptionTable().Describe(), ""}});
+  const std::string observation_group = "Candidate points (ObservationOptions; docs/fitting.md, \"Association\")";
+  AddTableOptions(command, ObservationOptionTable().Bind(&o.sequence.observations), "", observation_group);
   command->add_flag("--self-calibrate,!--no-self-calibrate", o.self_calibrate,
                     "Estimate the detector's noise model from the sequences (robust linking, residuals of the "
                     "smoothed tracks, to a fixed point) and link and fit with it; writes OUT/detector_model.json "
