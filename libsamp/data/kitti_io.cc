@@ -87,6 +87,23 @@ bool IsBlank(const std::string& line) {
   return std::all_of(line.begin(), line.end(), [](unsigned char c) { return std::isspace(c); });
 }
 
+std::vector<std::string> ParseSequenceList(const std::string& sequences, size_t digits) {
+  std::vector<std::string> names;
+  std::stringstream list(sequences);
+  for (std::string name; std::getline(list, name, ',');) {
+    name.erase(0, name.find_first_not_of(" \t"));
+    name.erase(name.find_last_not_of(" \t") + 1);
+    SAMP_CHECK(!name.empty()) << "--sequence '" << sequences << "': empty sequence name";
+    if (name.size() < digits && name.find_first_not_of("0123456789") == std::string::npos)
+      name = std::string(digits - name.size(), '0') + name;
+    SAMP_CHECK(std::find(names.begin(), names.end(), name) == names.end()) << "--sequence lists " << name << " twice";
+    names.push_back(name);
+  }
+  SAMP_CHECK(!names.empty()) << "--sequence is empty: give names (e.g. " << std::string(digits - 1, '0') << "4,"
+                             << std::string(digits - 2, '0') << "11) or all";
+  return names;
+}
+
 // Plausibility bounds of a label line (docs/reliability.md): loose on purpose,
 // they refuse garbage, not unusual cars.
 constexpr double kMaxLabelPixel = 1e5;        // |2D box coordinate|, px

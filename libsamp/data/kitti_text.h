@@ -25,6 +25,11 @@ std::string At(const std::string& path, int line_number);
 // A finite number / an integer, else samp::Error "path:line: field 'token' is not ...".
 double ParseDouble(const std::string& token, const std::string& path, int line_number, const char* field);
 int ParseInt(const std::string& token, const std::string& path, int line_number, const char* field);
+// The names of a --sequence list "A,B,C": each trimmed of blanks, a name of
+// digits alone padded with zeros to `digits` (KITTI tracking 4, samp's and
+// KITTI stereo's layouts 6); an empty name, a name given twice or an empty
+// list is a samp::Error.
+std::vector<std::string> ParseSequenceList(const std::string& sequences, size_t digits);
 // The object columns "type trunc occ alpha x1 y1 x2 y2 h w l x y z ry [score]"
 // starting at tokens[first], with the plausibility checks of ReadLabels.
 ObjectLabel ParseObject(const std::vector<std::string>& tokens, size_t first, const std::string& path,

@@ -131,16 +131,7 @@ std::vector<std::string> KittiTrackingSequenceFolders(const std::string& root, c
     std::sort(names.begin(), names.end());
     SAMP_CHECK(!names.empty()) << images.string() << ": no sequence folders";
   } else {
-    std::stringstream list(sequences);
-    for (std::string name; std::getline(list, name, ',');) {
-      name.erase(0, name.find_first_not_of(" \t"));
-      name.erase(name.find_last_not_of(" \t") + 1);
-      SAMP_CHECK(!name.empty()) << "--sequence '" << sequences << "': empty sequence name";
-      if (name.size() < 4 && std::all_of(name.begin(), name.end(), [](char c) { return c >= '0' && c <= '9'; }))
-        name = std::string(4 - name.size(), '0') + name;
-      names.push_back(name);
-    }
-    SAMP_CHECK(!names.empty()) << "--sequence is empty: give names (0004,0011) or all";
+    names = kitti_text::ParseSequenceList(sequences, 4);
   }
   std::vector<std::string> folders;
   for (const std::string& name : names) {
@@ -148,8 +139,6 @@ std::vector<std::string> KittiTrackingSequenceFolders(const std::string& root, c
     SAMP_CHECK(fs::is_directory(layout.LeftImageFolder(), error))
         << "KITTI tracking root " << root << " has no sequence " << name << " (no " << layout.LeftImageFolder()
         << ")";
-    SAMP_CHECK(std::find(folders.begin(), folders.end(), layout.LeftImageFolder()) == folders.end())
-        << "--sequence lists " << name << " twice";
     folders.push_back(layout.LeftImageFolder());
   }
   return folders;

@@ -13,6 +13,7 @@
 #include "libsamp/core/log.h"
 #include "libsamp/data/detection_files.h"
 #include "libsamp/data/kitti_io.h"
+#include "libsamp/data/kitti_text.h"
 #include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/sequence_layout.h"
 
@@ -68,6 +69,19 @@ void SequenceOptions::Check() const {
 
 namespace {
 
+// One frame per left image, with the right image of the same frame when there is one.
+void AddStereoFrames(const std::map<int, std::string>& left, const std::map<int, std::string>& right,
+                     SequenceFiles* files) {
+  for (const auto& [frame, path] : left) {
+    FrameFiles f;
+    f.frame = frame;
+    f.image_left = path;
+    const auto it = right.find(frame);
+    if (it != right.end()) f.image_right = it->second;
+    files->frames.push_back(f);
+  }
+}
+
 // A sequence of KITTI tracking's layout (data/kitti_tracking.h).
 SequenceFiles ListKittiTrackingSequence(const std::string& directory, const KittiTrackingLayout& layout) {
   std::error_code error;
@@ -95,14 +109,7 @@ SequenceFiles ListKittiTrackingSequence(const std::string& directory, const Kitt
     }
   }
   SAMP_CHECK(!left.empty()) << "KITTI tracking sequence " << directory << ": no <ffffff>.png images";
-  for (const auto& [frame, path] : left) {
-    FrameFiles f;
-    f.frame = frame;
-    f.image_left = path;
-    const auto it = right.find(frame);
-    if (it != right.end()) f.image_right = it->second;
-    files.frames.push_back(f);
-  }
+  AddStereoFrames(left, right, &files);
   return files;
 }
 
@@ -120,14 +127,7 @@ SequenceFiles ListKittiStereoSequence(const std::string& calibration) {
   SAMP_CHECK(!left.empty()) << "KITTI stereo sequence " << calibration << ": no "
                             << (root / SequenceLayout::kLeftImageFolder / (files.name + "_<ff>.png")).string()
                             << " images";
-  for (const auto& [frame, path] : left) {
-    FrameFiles f;
-    f.frame = frame;
-    f.image_left = path;
-    const auto it = right.find(frame);
-    if (it != right.end()) f.image_right = it->second;
-    files.frames.push_back(f);
-  }
+  AddStereoFrames(left, right, &files);
   return files;
 }
 
@@ -165,16 +165,7 @@ std::vector<std::string> KittiStereoSequences(const std::string& root, const std
     std::sort(names.begin(), names.end());
     SAMP_CHECK(!names.empty()) << root << ": no sequence has both calib_cam_to_cam/<seq>.txt and image_2/<seq>_<ff>.png";
   } else {
-    std::stringstream list(sequences);
-    for (std::string name; std::getline(list, name, ',');) {
-      name.erase(0, name.find_first_not_of(" \t"));
-      name.erase(name.find_last_not_of(" \t") + 1);
-      SAMP_CHECK(!name.empty()) << "--sequence '" << sequences << "': empty sequence name";
-      if (name.size() < 6 && name.find_first_not_of("0123456789") == std::string::npos)
-        name = std::string(6 - name.size(), '0') + name;
-      SAMP_CHECK(std::find(names.begin(), names.end(), name) == names.end()) << "--sequence lists " << name << " twice";
-      names.push_back(name);
-    }
+    names = kitti_text::ParseSequenceList(sequences, 6);
   }
   std::vector<std::string> files;
   for (const std::string& name : names) {

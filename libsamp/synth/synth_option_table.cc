@@ -155,7 +155,7 @@ OptionTable<SynthOptions> MakeSynthTable() {
                       "folders written: samp (OUT/<seq>/) or kitti-tracking (KITTI tracking's own: "
                       "OUT/training/image_02|image_03/<seq>/, calib/, oxts/, label_02/, and the detections "
                       "OUT/detections/<seq>.txt; docs/sequence_format.md)");
-  t.Add("num_frames", &O::num_frames, "frames per sequence").Flag("frames").AtLeast(1).AtMost(100);
+  t.Add("num_frames", &O::num_frames, "frames per sequence").Flag("frames").AtLeast(1).AtMost(1000);
   t.Add("frame_rate_hz", &O::frame_rate_hz, "frame rate, Hz").Flag("fps").Positive();
   t.Add("width", &O::width, "image width, px").AtLeast(32);
   t.Add("height", &O::height, "image height, px").AtLeast(32);

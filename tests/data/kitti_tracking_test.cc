@@ -10,6 +10,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/pose.h"
+#include "libsamp/data/kitti_text.h"
 #include "tests/testing/expect_error.h"
 
 namespace samp {
@@ -239,6 +240,17 @@ TEST_F(KittiTrackingTest, LayoutPathsAndSequenceLists) {
   // samp's layout inside an image_02 folder (it has calib/) is samp's.
   fs::create_directories(dir_ / "training" / "image_02" / "0004" / "calib");
   EXPECT_FALSE(KittiTrackingLayout::FromSequenceFolder(layout.LeftImageFolder(), nullptr));
+}
+
+// The one parser of --sequence lists, for KITTI tracking (4 digits) and the
+// 6-digit layouts.
+TEST(SequenceListTest, TrimsPadsAndRejectsEmptyAndRepeatedNames) {
+  EXPECT_EQ(kitti_text::ParseSequenceList(" 4, 0011 ,abc", 4), (std::vector<std::string>{"0004", "0011", "abc"}));
+  EXPECT_EQ(kitti_text::ParseSequenceList("46,000047", 6), (std::vector<std::string>{"000046", "000047"}));
+  ExpectError([] { kitti_text::ParseSequenceList("4,,5", 4); }, {"--sequence '4,,5': empty sequence name"});
+  ExpectError([] { kitti_text::ParseSequenceList("46,000046", 6); }, {"--sequence lists 000046 twice"});
+  ExpectError([] { kitti_text::ParseSequenceList("", 4); }, {"--sequence is empty", "0004,0011"});
+  ExpectError([] { kitti_text::ParseSequenceList("", 6); }, {"000004,000011"});
 }
 
 TEST(MoveLabelTest, MovesAndRecomputesAlpha) {

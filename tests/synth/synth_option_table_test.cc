@@ -28,8 +28,8 @@ TEST(SynthOptionTable, CheckNamesTheFieldTheRuleAndTheValue) {
     o.Check();
   }());
   SynthOptions o = Named();
-  o.num_frames = 101;
-  test::ExpectError([&] { o.Check(); }, {"SynthOptions.num_frames must be in [1, 100], got 101"});
+  o.num_frames = 1001;
+  test::ExpectError([&] { o.Check(); }, {"SynthOptions.num_frames must be in [1, 1000], got 1001"});
   o = Named();
   o.max_distance = 4.5;
   o.min_distance = 5.0;
@@ -114,7 +114,7 @@ TEST(SynthOptionTable, CommandLineNamesAreTheFormerOnes) {
   EXPECT_EQ(CommandLineName(by_name["detector.flip_probability"].flag, ""), "--det-flip");
   EXPECT_EQ(CommandLineName(by_name["detector.yaw_sigma_deg_a"].flag, ""), "--det-yaw-sigma-a");
   EXPECT_EQ(by_name["disparity"].Validate("true"), "");
-  EXPECT_NE(by_name["num_frames"].Validate("0").find("must be in [1, 100]"), std::string::npos);
+  EXPECT_NE(by_name["num_frames"].Validate("0").find("must be in [1, 1000]"), std::string::npos);
   EXPECT_TRUE(by_name["scene"].internal);
   EXPECT_TRUE(by_name["detector.profile"].internal);
 }
