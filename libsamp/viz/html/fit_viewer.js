@@ -36,18 +36,11 @@
   var legend = C.element('div', { class: 'samp-legend' }, view);
 
   // ---- three.js set-up ------------------------------------------------------------
-  var renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
-  renderer.setPixelRatio(window.devicePixelRatio || 1);
-  view.appendChild(renderer.domElement);
-  var scene = new THREE.Scene();
-  scene.background = new THREE.Color(BACKGROUND[0] / 255, BACKGROUND[1] / 255, BACKGROUND[2] / 255);
-  var camera = new THREE.PerspectiveCamera(45, 1, 0.1, 2000);
-  var controls = new THREE.OrbitControls(camera, renderer.domElement);
+  var three = C.threeView(view, BACKGROUND, { fov: 45, near: 0.1, far: 2000, hemisphere: 0.75, sun: 0.55,
+                                              sunAt: [-20, 40, 15] });
+  var renderer = three.renderer, scene = three.scene, camera = three.camera, controls = three.controls;
+  var render = three.render, resize = three.resize;
   controls.enableDamping = false;
-  scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8a8a, 0.75));
-  var sun = new THREE.DirectionalLight(0xffffff, 0.55);
-  sun.position.set(-20, 40, 15);
-  scene.add(sun);
   var world = C.kittiGroup();  // KITTI world -> three.js
   scene.add(world);
 
@@ -348,15 +341,6 @@
     setFrame(0);
   }
 
-  function resize() {
-    var w = Math.max(1, view.clientWidth), h = Math.max(1, view.clientHeight);
-    renderer.setSize(w, h);
-    camera.aspect = w / h;
-    camera.updateProjectionMatrix();
-    render();
-  }
-
-  function render() { renderer.render(scene, camera); }
 
   function togglePlay() {
     if (playing) {

@@ -16,17 +16,10 @@
   var view = C.element('div', { id: 'samp-view' }, main);
   var panel = C.element('aside', { id: 'samp-panel' }, main);
 
-  var renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
-  renderer.setPixelRatio(window.devicePixelRatio || 1);
-  view.appendChild(renderer.domElement);
-  var scene = new THREE.Scene();
-  scene.background = new THREE.Color(BACKGROUND[0] / 255, BACKGROUND[1] / 255, BACKGROUND[2] / 255);
-  var camera = new THREE.PerspectiveCamera(35, 1, 0.05, 200);
-  var controls = new THREE.OrbitControls(camera, renderer.domElement);
-  scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8a8a, 0.7));
-  var sun = new THREE.DirectionalLight(0xffffff, 0.6);
-  sun.position.set(-3, 6, 4);
-  scene.add(sun);
+  var three = C.threeView(view, BACKGROUND, { fov: 35, near: 0.05, far: 200, hemisphere: 0.7, sun: 0.6,
+                                              sunAt: [-3, 6, 4] });
+  var renderer = three.renderer, scene = three.scene, camera = three.camera, controls = three.controls;
+  var render = three.render, resize = three.resize;
   var object = C.kittiGroup();  // object frame (x front, y down, z left) -> three.js
   scene.add(object);
   object.add(new THREE.AxesHelper(0.8));
@@ -102,14 +95,6 @@
     sliders.forEach(function (s, i) { s.value = 0; code[i] = 0; s.dispatchEvent(new Event('input')); });
   });
 
-  function render() { renderer.render(scene, camera); }
-  function resize() {
-    var w = Math.max(1, view.clientWidth), h = Math.max(1, view.clientHeight);
-    renderer.setSize(w, h);
-    camera.aspect = w / h;
-    camera.updateProjectionMatrix();
-    render();
-  }
   controls.addEventListener('change', render);
   window.addEventListener('resize', resize);
   // A three-quarter view from the front left, above.

@@ -39,11 +39,37 @@
     }
     return differ / (w * h);
   }
+  // The three.js view of both pages inside the element `view`: renderer (it
+  // keeps its drawing buffer for nonBlankShare), scene on the background
+  // colour, perspective camera with orbit controls, a hemisphere light and a
+  // sun; render() draws, resize() fits the canvas to the element and draws.
+  function threeView(view, background, o) {
+    var renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+    renderer.setPixelRatio(window.devicePixelRatio || 1);
+    view.appendChild(renderer.domElement);
+    var scene = new THREE.Scene();
+    scene.background = new THREE.Color(background[0] / 255, background[1] / 255, background[2] / 255);
+    var camera = new THREE.PerspectiveCamera(o.fov, 1, o.near, o.far);
+    var controls = new THREE.OrbitControls(camera, renderer.domElement);
+    scene.add(new THREE.HemisphereLight(0xffffff, 0x8a8a8a, o.hemisphere));
+    var sun = new THREE.DirectionalLight(0xffffff, o.sun);
+    sun.position.set(o.sunAt[0], o.sunAt[1], o.sunAt[2]);
+    scene.add(sun);
+    function render() { renderer.render(scene, camera); }
+    function resize() {
+      var w = Math.max(1, view.clientWidth), h = Math.max(1, view.clientHeight);
+      renderer.setSize(w, h);
+      camera.aspect = w / h;
+      camera.updateProjectionMatrix();
+      render();
+    }
+    return { renderer: renderer, scene: scene, camera: camera, controls: controls, render: render, resize: resize };
+  }
   function writeSelfTest(result) {
     result.errors = window.sampErrors.slice();
     var pre = element('pre', { id: 'samp-selftest' }, document.body, JSON.stringify(result));
     pre.style.display = 'none';
   }
   window.sampCommon = { bytes: bytes, typed: typed, element: element, kittiGroup: kittiGroup, fixed: fixed,
-                        nonBlankShare: nonBlankShare, writeSelfTest: writeSelfTest };
+                        nonBlankShare: nonBlankShare, threeView: threeView, writeSelfTest: writeSelfTest };
 })();
