@@ -7,6 +7,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/pose.h"
+#include "libsamp/data/sequence_option_table.h"
 
 namespace samp {
 namespace {
@@ -32,16 +33,7 @@ Eigen::Vector4d FitPlaneLeastSquares(const std::vector<Eigen::Vector3d>& points,
 
 }  // namespace
 
-void RoadPlaneOptions::Check() const {
-  SAMP_CHECK(iterations > 0) << "RoadPlaneOptions.iterations = " << iterations << " must be > 0";
-  SAMP_CHECK(inlier_threshold > 0) << "RoadPlaneOptions.inlier_threshold must be > 0";
-  SAMP_CHECK(max_depth > 0) << "RoadPlaneOptions.max_depth must be > 0";
-  SAMP_CHECK(max_tilt_deg > 0 && max_tilt_deg < 90) << "RoadPlaneOptions.max_tilt_deg must be in (0, 90)";
-  SAMP_CHECK(min_camera_height < max_camera_height)
-      << "RoadPlaneOptions.min_camera_height must be below max_camera_height";
-  SAMP_CHECK(max_points >= 3) << "RoadPlaneOptions.max_points must be >= 3";
-  SAMP_CHECK(min_inliers >= 3) << "RoadPlaneOptions.min_inliers must be >= 3";
-}
+void RoadPlaneOptions::Check() const { RoadPlaneOptionTable().Check(*this); }
 
 std::string RoadPlaneSummary::BriefReport() const {
   std::ostringstream s;

@@ -5,6 +5,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "libsamp/core/error.h"
+#include "libsamp/data/sequence_option_table.h"
 
 namespace samp {
 namespace {
@@ -19,20 +20,7 @@ int SgbmMode(const std::string& mode) {
 
 }  // namespace
 
-void StereoOptions::Check() const {
-  SAMP_CHECK(num_disparities > 0 && num_disparities % 16 == 0)
-      << "StereoOptions.num_disparities = " << num_disparities << " must be a positive multiple of 16";
-  SAMP_CHECK(block_size >= 1 && block_size <= 11 && block_size % 2 == 1)
-      << "StereoOptions.block_size = " << block_size << " must be odd and in [1, 11]";
-  SAMP_CHECK(p1 >= 0 && p2 >= 0) << "StereoOptions.p1/p2 must be >= 0 (0 = automatic)";
-  SAMP_CHECK(p1 == 0 || p2 == 0 || p2 > p1) << "StereoOptions.p2 = " << p2 << " must exceed p1 = " << p1;
-  SAMP_CHECK(uniqueness_ratio >= 0 && uniqueness_ratio < 100)
-      << "StereoOptions.uniqueness_ratio = " << uniqueness_ratio << " must be in [0, 100)";
-  SAMP_CHECK(speckle_window_size >= 0) << "StereoOptions.speckle_window_size must be >= 0";
-  SAMP_CHECK(speckle_range >= 0) << "StereoOptions.speckle_range must be >= 0";
-  SAMP_CHECK(pre_filter_cap > 0) << "StereoOptions.pre_filter_cap must be > 0";
-  SgbmMode(mode);
-}
+void StereoOptions::Check() const { StereoOptionTable().Check(*this); }
 
 cv::Mat ComputeDisparity(const cv::Mat& left, const cv::Mat& right, const StereoOptions& options) {
   options.Check();

@@ -5,33 +5,6 @@
 
 namespace samp {
 
-void OptionFields(OptionsJson& io, StereoOptions& o) {
-  io("min_disparity", o.min_disparity);
-  io("num_disparities", o.num_disparities);
-  io("block_size", o.block_size);
-  io("p1", o.p1);
-  io("p2", o.p2);
-  io("disp12_max_diff", o.disp12_max_diff);
-  io("pre_filter_cap", o.pre_filter_cap);
-  io("uniqueness_ratio", o.uniqueness_ratio);
-  io("speckle_window_size", o.speckle_window_size);
-  io("speckle_range", o.speckle_range);
-  io("mode", o.mode);
-}
-
-void OptionFields(OptionsJson& io, RoadPlaneOptions& o) {
-  io("iterations", o.iterations);
-  io("inlier_threshold", o.inlier_threshold);
-  io("min_point_height_below_camera", o.min_point_height_below_camera);
-  io("max_depth", o.max_depth);
-  io("max_tilt_deg", o.max_tilt_deg);
-  io("min_camera_height", o.min_camera_height);
-  io("max_camera_height", o.max_camera_height);
-  io("max_points", o.max_points);
-  io("min_inliers", o.min_inliers);
-  io("seed", o.seed);
-}
-
 void OptionFields(OptionsJson& io, SequenceOptions& o) {
   io.Nested("stereo", o.stereo);
   io.Nested("road_plane", o.road_plane);

@@ -9,14 +9,14 @@
 
 #include "libsamp/core/json_fields.h"
 #include "libsamp/data/observation_option_table.h"
+#include "libsamp/data/sequence_option_table.h"
 #include "libsamp/fit/fit_option_table.h"
 #include "libsamp/pipeline/run_fit.h"
 
 namespace samp {
 
-void OptionFields(OptionsJson& io, StereoOptions& o);
-void OptionFields(OptionsJson& io, RoadPlaneOptions& o);
-// ObservationOptions: data/observation_option_table.h; TrackerOptions: data/tracking.h.
+// StereoOptions, RoadPlaneOptions: data/sequence_option_table.h; ObservationOptions:
+// data/observation_option_table.h; TrackerOptions: data/tracking.h.
 void OptionFields(OptionsJson& io, SequenceOptions& o);
 // MotionNoise, FitOptions: fit/fit_option_table.h (their option tables).
 void OptionFields(OptionsJson& io, RunFitOptions& o);

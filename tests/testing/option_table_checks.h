@@ -21,8 +21,14 @@ inline std::string OtherValue(const OptionInfo& info) {
   switch (info.kind) {
     case OptionKind::kFlag:
       return info.default_text == "true" ? "false" : "true";
-    case OptionKind::kInt:
-      return std::to_string(std::stoi(info.default_text) + 7);
+    case OptionKind::kInt: {
+      // The first of a few others that the field's own rule admits.
+      const int value = std::stoi(info.default_text);
+      for (int other : {value + 7, value + 2, value - 2, value - 7}) {
+        if (info.Validate(std::to_string(other)).empty()) return std::to_string(other);
+      }
+      break;
+    }
     case OptionKind::kUnsigned:
       return std::to_string(std::stoull(info.default_text) + 7);
     case OptionKind::kNumber: {

@@ -12,6 +12,7 @@
 #include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/observation_option_table.h"
 #include "libsamp/data/sequence.h"
+#include "libsamp/data/sequence_option_table.h"
 #include "libsamp/data/tracker_option_table.h"
 #include "libsamp/fit/fit_option_table.h"
 #include "libsamp/viz/fit_pictures.h"
@@ -111,9 +112,15 @@ void RegisterFitCommand(CLI::App* app) {
                 "Detector vertical std. dev. a,b: a + b d (m)", tracker_group);
   AddHelpOptions(command, {{"markdown", FitOptionTable().Describe(), ""},
                            {"tracker-markdown", TrackerOptionTable().Describe(), "tracker-"},
-                           {"observation-markdown", ObservationOptionTable().Describe(), ""}});
+                           {"observation-markdown", ObservationOptionTable().Describe(), ""},
+                           {"stereo-markdown", StereoOptionTable().Describe(), "stereo-"},
+                           {"road-markdown", RoadPlaneOptionTable().Describe(), "road-"}});
   const std::string observation_group = "Candidate points (ObservationOptions; docs/fitting.md, \"Association\")";
   AddTableOptions(command, ObservationOptionTable().Bind(&o.sequence.observations), "", observation_group);
+  AddTableOptions(command, StereoOptionTable().Bind(&o.sequence.stereo), "stereo-",
+                  "Disparity of frames without disparity/ (StereoOptions; docs/sequence_format.md, \"Stereo\")");
+  AddTableOptions(command, RoadPlaneOptionTable().Bind(&o.sequence.road_plane), "road-",
+                  "Road plane of frames without planes/ (RoadPlaneOptions; docs/sequence_format.md, \"Road plane\")");
   command->add_flag("--self-calibrate,!--no-self-calibrate", o.self_calibrate,
                     "Estimate the detector's noise model from the sequences (robust linking, residuals of the "
                     "smoothed tracks, to a fixed point) and link and fit with it; writes OUT/detector_model.json "

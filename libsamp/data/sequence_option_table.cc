@@ -1,0 +1,72 @@
+#include "libsamp/data/sequence_option_table.h"
+
+namespace samp {
+
+namespace {
+
+OptionTable<StereoOptions> MakeStereoTable() {
+  using O = StereoOptions;
+  OptionTable<O> t("StereoOptions");
+  t.Add("min_disparity", &O::min_disparity, "smallest disparity searched, px");
+  t.Add("num_disparities", &O::num_disparities, "number of disparities searched, px")
+      .Positive()
+      .Rule("a multiple of 16", [](const O& o) { return o.num_disparities % 16 == 0; });
+  t.Add("block_size", &O::block_size, "matching block side, px")
+      .AtLeast(1)
+      .AtMost(11)
+      .Rule("odd", [](const O& o) { return o.block_size % 2 == 1; });
+  t.Add("p1", &O::p1, "smoothness penalty of a disparity change of 1 px (0 = OpenCV's 8 channels block^2)")
+      .NonNegative();
+  t.Add("p2", &O::p2, "smoothness penalty of a change above 1 px (0 = OpenCV's 32 channels block^2)")
+      .NonNegative()
+      .Rule("> p1 when both are set", [](const O& o) { return o.p1 == 0 || o.p2 == 0 || o.p2 > o.p1; });
+  t.Add("disp12_max_diff", &O::disp12_max_diff, "maximal left-right consistency difference, px (< 0: no check)");
+  t.Add("pre_filter_cap", &O::pre_filter_cap, "clipping of the prefiltered image derivatives").Positive();
+  t.Add("uniqueness_ratio", &O::uniqueness_ratio, "the best cost beats the second best by this margin, %")
+      .NonNegative()
+      .Below(100);
+  t.Add("speckle_window_size", &O::speckle_window_size,
+        "regions smaller than this (px) with a disparity spread above speckle_range are invalidated (0 = off)")
+      .NonNegative();
+  t.Add("speckle_range", &O::speckle_range, "maximal disparity spread within a speckle region, px").NonNegative();
+  t.Add("mode", &O::mode, "OpenCV's SGBM mode: sgbm (5 directions), hh (8, more memory), 3way (fast), hh4")
+      .Choices({"sgbm", "hh", "3way", "hh4"});
+  return t;
+}
+
+OptionTable<RoadPlaneOptions> MakeRoadPlaneTable() {
+  using O = RoadPlaneOptions;
+  OptionTable<O> t("RoadPlaneOptions");
+  t.Add("iterations", &O::iterations, "RANSAC hypotheses (3-point samples)").Positive();
+  t.Add("inlier_threshold", &O::inlier_threshold, "point-to-plane distance of an inlier, m").Positive();
+  t.Add("min_point_height_below_camera", &O::min_point_height_below_camera,
+        "only points this far below the camera are used, m");
+  t.Add("max_depth", &O::max_depth, "... and nearer than this, m").Positive();
+  t.Add("max_tilt_deg", &O::max_tilt_deg, "hypotheses whose normal is further from the camera's up axis are rejected, deg")
+      .Positive()
+      .Below(90);
+  t.Add("min_camera_height", &O::min_camera_height, "accepted camera heights above the plane: from, m")
+      .Rule("< max_camera_height", [](const O& o) { return o.min_camera_height < o.max_camera_height; });
+  t.Add("max_camera_height", &O::max_camera_height, "... to, m");
+  t.Add("max_points", &O::max_points, "at most this many points are used (seeded subsample)").AtLeast(3);
+  t.Add("min_inliers", &O::min_inliers, "the fit fails with fewer inliers").AtLeast(3);
+  t.Add("seed", &O::seed, "seed of the subsample and of RANSAC").Internal();
+  return t;
+}
+
+}  // namespace
+
+const OptionTable<StereoOptions>& StereoOptionTable() {
+  static const OptionTable<StereoOptions> table = MakeStereoTable();
+  return table;
+}
+
+const OptionTable<RoadPlaneOptions>& RoadPlaneOptionTable() {
+  static const OptionTable<RoadPlaneOptions> table = MakeRoadPlaneTable();
+  return table;
+}
+
+void OptionFields(OptionsJson& io, StereoOptions& o) { StereoOptionTable().Json(io, o); }
+void OptionFields(OptionsJson& io, RoadPlaneOptions& o) { RoadPlaneOptionTable().Json(io, o); }
+
+}  // namespace samp
