@@ -538,6 +538,111 @@ std::vector<SequenceFrame> FillTrackFrames(const SequenceReader& reader, const S
   return read;
 }
 
+// The sequence's name, layout and pose source in the summary, with a
+// message for each substitute (no ego poses, detections from another source).
+void DescribeSequence(const SequenceReader& reader, const SequenceOptions& options, SequenceSummary* result) {
+  const SequenceFiles& files = reader.files();
+  result->name = files.name;
+  result->poses_from_file = reader.has_poses();
+  result->label_frame_offset = reader.label_frame_offset();
+  if (files.layout == SequenceFiles::Layout::kKittiStereo) {
+    result->layout = "kitti-stereo";
+    result->messages.push_back(files.name + ": KITTI stereo 2015 layout (" + files.calibration +
+                               "), no ego poses: static camera assumed");
+  }
+  if (files.layout == SequenceFiles::Layout::kKittiTracking) {
+    result->layout = "kitti-tracking";
+    result->messages.push_back(files.name + ": KITTI tracking layout, ego poses from " + files.oxts +
+                               ", detections from " +
+                               (options.tracking_labels_path.empty() ? reader.detections_source() : "--tracks"));
+  }
+  if (!reader.has_poses() && files.layout == SequenceFiles::Layout::kSamp)
+    result->messages.push_back(files.name + ": no poses file, static camera assumed");
+}
+
+// The reader's frames within options' range.
+struct FramesInRange {
+  std::vector<int> indices;           // the reader's frame indices
+  std::map<int, int> index_of_frame;  // frame number -> index
+};
+
+// Throws samp::Error when the range holds no frame.
+FramesInRange SelectFrames(const std::string& directory, const SequenceReader& reader,
+                           const SequenceOptions& options) {
+  const SequenceFiles& files = reader.files();
+  FramesInRange range;
+  for (int i = 0; i < reader.num_frames(); ++i) {
+    if (!FrameInRange(files.frames[i].frame, options)) continue;
+    range.indices.push_back(i);
+    range.index_of_frame[files.frames[i].frame] = i;
+  }
+  SAMP_CHECK(!range.indices.empty()) << "sequence " << directory << ": no frames in the range ["
+                                     << options.first_frame << ", " << options.last_frame << "]";
+  return range;
+}
+
+// Gaps in the frame numbering (frames without any file): said once per gap,
+// in the messages (tracks.json) and as a warning.
+void ReportFrameGaps(const SequenceFiles& files, const std::vector<int>& indices, SequenceSummary* result) {
+  for (size_t k = 1; k < indices.size(); ++k) {
+    const int before = files.frames[indices[k - 1]].frame, after = files.frames[indices[k]].frame;
+    if (after == before + 1) continue;
+    const std::string gap = files.name + ": frame(s) " + std::to_string(before + 1) +
+                            (after - 1 > before + 1 ? " to " + std::to_string(after - 1) : std::string()) +
+                            " missing (no image, disparity or detection file) between frames " +
+                            std::to_string(before) + " and " + std::to_string(after);
+    LogWarning() << gap;
+    result->messages.push_back(gap);
+  }
+}
+
+// The tracking summary in the log, its warnings also in the messages.
+void ReportTracking(const std::string& name, SequenceSummary* result) {
+  if (result->tracking.num_short_tracks > 0) LogInfo() << name << ": " << result->tracking.BriefReport();
+  for (const std::string& warning : result->tracking.warnings) {
+    LogWarning() << name << ": " << warning;
+    result->messages.push_back(name + ": " + warning);
+  }
+}
+
+// One track per linked track, with a TrackFrame slot per detection (filled by FillTrackFrames).
+std::vector<Track> EmptyTracks(const SequenceReader& reader, const std::vector<LinkedTrack>& linked) {
+  std::vector<Track> tracks(linked.size());
+  for (size_t t = 0; t < linked.size(); ++t) {
+    tracks[t].id = linked[t].id;
+    tracks[t].sequence = reader.files().name;
+    tracks[t].type = linked[t].detections.front().type;
+    tracks[t].calibration = reader.calibration();
+    tracks[t].frames.resize(linked[t].detections.size());
+  }
+  return tracks;
+}
+
+// What reading the frames substituted (estimated planes, computed disparity), counted and noted.
+void CountFrameSubstitutes(const std::vector<SequenceFrame>& frames, SequenceSummary* result) {
+  for (const SequenceFrame& frame : frames) {
+    result->frames_with_estimated_plane += frame.plane_estimated ? 1 : 0;
+    result->frames_with_computed_disparity += frame.disparity_computed ? 1 : 0;
+    result->frames_plane_estimation_failed += frame.plane_estimation_failed ? 1 : 0;
+    result->messages.insert(result->messages.end(), frame.notes.begin(), frame.notes.end());
+  }
+}
+
+// Track frames and candidate points, with a message for each track frame without points.
+void CountTrackFrames(const std::string& name, const std::vector<Track>& tracks, SequenceSummary* result) {
+  for (const Track& track : tracks)
+    for (const TrackFrame& tf : track.frames) {
+      ++result->num_track_frames;
+      result->num_candidate_points += static_cast<long long>(tf.candidate_points_in_world.size());
+      if (tf.candidate_points_in_world.empty()) {
+        ++result->num_track_frames_without_points;
+        result->messages.push_back(name + ": track " + std::to_string(track.id) + " has no stereo points in frame " +
+                                   std::to_string(tf.frame));
+      }
+    }
+  result->num_tracks = static_cast<int>(tracks.size());
+}
+
 }  // namespace
 
 std::vector<Track> LoadSequenceTracks(const std::string& directory, const SequenceOptions& options,
@@ -548,80 +653,17 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
   SequenceSummary local;
   SequenceSummary& result = summary != nullptr ? *summary : local;
   result = SequenceSummary();
-  result.name = files.name;
-  result.poses_from_file = reader.has_poses();
-  result.label_frame_offset = reader.label_frame_offset();
-  if (files.layout == SequenceFiles::Layout::kKittiStereo) {
-    result.layout = "kitti-stereo";
-    result.messages.push_back(files.name + ": KITTI stereo 2015 layout (" + files.calibration +
-                              "), no ego poses: static camera assumed");
-  }
-  if (files.layout == SequenceFiles::Layout::kKittiTracking) {
-    result.layout = "kitti-tracking";
-    result.messages.push_back(files.name + ": KITTI tracking layout, ego poses from " + files.oxts +
-                              ", detections from " +
-                              (options.tracking_labels_path.empty() ? reader.detections_source() : "--tracks"));
-  }
-  if (!reader.has_poses() && files.layout == SequenceFiles::Layout::kSamp)
-    result.messages.push_back(files.name + ": no poses file, static camera assumed");
-
-  std::vector<int> indices;  // frame indices within the range
-  std::map<int, int> index_of_frame;
-  for (int i = 0; i < reader.num_frames(); ++i) {
-    if (!FrameInRange(files.frames[i].frame, options)) continue;
-    indices.push_back(i);
-    index_of_frame[files.frames[i].frame] = i;
-  }
-  SAMP_CHECK(!indices.empty()) << "sequence " << directory << ": no frames in the range ["
-                               << options.first_frame << ", " << options.last_frame << "]";
-  result.num_frames = static_cast<int>(indices.size());
-  // Gaps in the frame numbering (frames without any file): said once per gap,
-  // in the messages (tracks.json) and as a warning.
-  for (size_t k = 1; k < indices.size(); ++k) {
-    const int before = files.frames[indices[k - 1]].frame, after = files.frames[indices[k]].frame;
-    if (after == before + 1) continue;
-    const std::string gap = files.name + ": frame(s) " + std::to_string(before + 1) +
-                            (after - 1 > before + 1 ? " to " + std::to_string(after - 1) : std::string()) +
-                            " missing (no image, disparity or detection file) between frames " +
-                            std::to_string(before) + " and " + std::to_string(after);
-    LogWarning() << gap;
-    result.messages.push_back(gap);
-  }
+  DescribeSequence(reader, options, &result);
+  const FramesInRange range = SelectFrames(directory, reader, options);
+  result.num_frames = static_cast<int>(range.indices.size());
+  ReportFrameGaps(files, range.indices, &result);
 
   const std::vector<LinkedTrack> linked =
-      LinkSequenceTracks(directory, reader, options, indices, index_of_frame, &result);
-  if (result.tracking.num_short_tracks > 0)
-    LogInfo() << files.name << ": " << result.tracking.BriefReport();
-  for (const std::string& warning : result.tracking.warnings) {
-    LogWarning() << files.name << ": " << warning;
-    result.messages.push_back(files.name + ": " + warning);
-  }
-
-  std::vector<Track> tracks(linked.size());
-  for (size_t t = 0; t < linked.size(); ++t) {
-    tracks[t].id = linked[t].id;
-    tracks[t].sequence = files.name;
-    tracks[t].type = linked[t].detections.front().type;
-    tracks[t].calibration = reader.calibration();
-    tracks[t].frames.resize(linked[t].detections.size());
-  }
-  for (const SequenceFrame& frame : FillTrackFrames(reader, options, linked, index_of_frame, &tracks)) {
-    result.frames_with_estimated_plane += frame.plane_estimated ? 1 : 0;
-    result.frames_with_computed_disparity += frame.disparity_computed ? 1 : 0;
-    result.frames_plane_estimation_failed += frame.plane_estimation_failed ? 1 : 0;
-    result.messages.insert(result.messages.end(), frame.notes.begin(), frame.notes.end());
-  }
-  for (const Track& track : tracks)
-    for (const TrackFrame& tf : track.frames) {
-      ++result.num_track_frames;
-      result.num_candidate_points += static_cast<long long>(tf.candidate_points_in_world.size());
-      if (tf.candidate_points_in_world.empty()) {
-        ++result.num_track_frames_without_points;
-        result.messages.push_back(files.name + ": track " + std::to_string(track.id) + " has no stereo points in frame " +
-                                  std::to_string(tf.frame));
-      }
-    }
-  result.num_tracks = static_cast<int>(tracks.size());
+      LinkSequenceTracks(directory, reader, options, range.indices, range.index_of_frame, &result);
+  ReportTracking(files.name, &result);
+  std::vector<Track> tracks = EmptyTracks(reader, linked);
+  CountFrameSubstitutes(FillTrackFrames(reader, options, linked, range.index_of_frame, &tracks), &result);
+  CountTrackFrames(files.name, tracks, &result);
   return tracks;
 }
 

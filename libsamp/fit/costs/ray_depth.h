@@ -36,6 +36,21 @@ class RayDepthCost : public DataCost {
 
   bool EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals, double* jz,
                     int jz_stride, double* jp, int jp_stride) const override;
+
+ private:
+  // The state of one group of up to kRayBatch points (ray_depth.cc).
+  struct Batch;
+  // Each point's object-frame position, phi there and ray; the points off the
+  // surface queued for RayDistances. False when a phi is not finite.
+  bool StartBatch(const PoseFrame& at, const double* pose, Batch* batch) const;
+  // The crossings along the rays (RayDistances), and the outside points
+  // without one queued for FirstCrossings.
+  void FindNearCrossings(const PoseFrame& at, Batch* batch) const;
+  // The outside points behind the far side (FirstCrossings).
+  void FindFarCrossings(const PoseFrame& at, Batch* batch) const;
+  // The residuals and Jacobian rows of the batch's points.
+  void WriteRows(const PoseFrame& at, int begin, Batch* batch, double* residuals, double* jz, int jz_stride,
+                 double* jp, int jp_stride) const;
 };
 
 }  // namespace samp

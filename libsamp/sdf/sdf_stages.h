@@ -1,0 +1,116 @@
+// The stages of ComputeSdf (sdf.cc, docs/sdf.md), each in its own file:
+// the unsigned distance to the seen triangles (sdf_distance.cc), the sign by
+// visibility carving (sdf_carving.cc) and by the closing of the surface
+// (sdf_closing.cc). Internal to libsamp/sdf: not installed, not part of the
+// interface. Every function here is thread-safe for distinct outputs (the
+// slab functions for disjoint slabs of one output).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "libsamp/core/grid_spec.h"
+#include "libsamp/scan/scanner.h"
+#include "libsamp/sdf/sdf.h"
+
+namespace samp {
+namespace sdf_internal {
+
+using Vec3 = Eigen::Vector3f;
+
+// A seen triangle, with its unit normal and plane offset (n . x = offset).
+struct Triangle {
+  Vec3 a, b, c;
+  Vec3 normal;
+  float offset;
+};
+
+// ---- Distance (sdf_distance.cc) ----
+
+// Far-away "closest point" of voxels not reached yet: its squared distance
+// (~3e30) loses every comparison and stays finite in float.
+constexpr float kFar = 1e15f;
+
+// Squared distance and closest surface point (x, y, z) per voxel.
+struct DistanceField {
+  std::vector<float> squared;
+  std::vector<float> x, y, z;
+};
+
+// Exact distances for the voxels with k in [k_begin, k_end) within `band` of
+// the triangles in `triangles` (indices into `all`).
+void SeedBand(const GridSpec& grid, const std::vector<Triangle>& all,
+              const std::vector<int32_t>& triangles, float band, int k_begin, int k_end,
+              DistanceField* field);
+
+// The closest points of the band propagated to the whole grid (two forward
+// and two backward raster passes, serial: each pass depends on the previous
+// voxels), then the distances; releases *field.
+std::vector<float> PropagateDistances(const GridSpec& grid, DistanceField* field);
+
+// ---- Carving (sdf_carving.cc) ----
+
+// One scan view as the carving uses it (object frame, float).
+struct CarveView {
+  Eigen::Matrix3f rotation;     // camera_from_object
+  Vec3 translation;
+  Vec3 camera_center;           // in the object frame
+  float fx, fy, cx, cy;
+  int width, height;
+  float lateral_per_depth;      // half pixel diagonal per metre of depth (+10 %)
+  const float* depth;
+  const int32_t* triangle;
+  // Every kCoarseStep-th pixel (from kCoarseOffset) along both axes: a small
+  // image that stays in cache, used for voxels far enough from the surface.
+  int coarse_width = 0, coarse_height = 0;
+  std::vector<float> coarse_depth;
+  // Minimum and maximum depth (inf included) over cells of kCell x kCell
+  // pixels: a block of voxels whose pixels lie in a few cells is decided at once.
+  int cell_width = 0, cell_height = 0;
+  std::vector<float> cell_min, cell_max;
+};
+
+// The views of the scan, with their tables; they point into `scan`'s images,
+// so `scan` must outlive them. Throws samp::Error for a view whose depth or
+// triangle image does not match its camera.
+std::vector<CarveView> MakeCarveViews(const ScanResult& scan);
+
+// Voxels within this distance of the surface may be "near" (docs/sdf.md) for
+// some view: the largest lateral_per_depth times the largest camera depth
+// of a grid corner (an upper bound of every voxel's depth).
+float NearDistance(const GridSpec& grid, const std::vector<CarveView>& views);
+
+// Carves the voxels with k in [k_begin, k_end): sets outside[v] = 1 for the
+// voxels some view sees in front of the surface, or that no view sees.
+void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
+               const std::vector<Triangle>& triangles, const std::vector<int32_t>& triangle_index,
+               const std::vector<float>& distance, float near_distance, const SdfOptions& options,
+               int k_begin, int k_end, std::vector<uint8_t>* outside);
+
+// ---- Closing (sdf_closing.cc) ----
+
+// The closing of the seen surface with radius tau = radius_voxels * h
+// (docs/sdf.md, "Sign"): O = the voxels farther than tau from the surface
+// that a 6-connected flood fill reaches from the grid's border, starting at
+// border voxels that the carving also calls outside (a body cut by the grid
+// border does not seed the fill). A voxel in O is outside. So is every voxel
+// in the open ball of radius d(o) around some o in O: that ball holds no
+// surface, so it lies wholly on o's side (exact up to the grid). Voxels
+// within tau of the surface look for such a ball among the O voxels within
+// tau + 1.5 h; voxels on the surface (d <= 1e-3 h, no direction) keep the
+// carving's word. Every other voxel is inside: gaps narrower than about 2 tau
+// are closed, and concave corners keep their shape (they are covered by the
+// balls of the O voxels beyond them). Returns false, leaving *closed_outside
+// empty, when no border voxel can seed the fill.
+bool ClosingOutside(const GridSpec& grid, const std::vector<float>& distance,
+                    const std::vector<uint8_t>& carved,
+                    float radius_voxels, std::vector<uint8_t>* closed_outside);
+
+// Number of 6-connected components of the inside voxels (outside[v] == 0)
+// and the share of the inside voxels in the largest one (0 when none).
+void InsideComponents(const GridSpec& grid, const std::vector<uint8_t>& outside,
+                      int* num_components, double* largest_share);
+
+}  // namespace sdf_internal
+}  // namespace samp
