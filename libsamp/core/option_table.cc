@@ -97,6 +97,7 @@ namespace {
 std::string CommandLine(const OptionInfo& o, const std::string& prefix) {
   if (o.internal) return "internal";
   std::string text = "`" + CommandLineName(o.flag, prefix) + "`";
+  if (o.short_flag != 0) text = "`-" + std::string(1, o.short_flag) + "`, " + text;
   if (o.kind == OptionKind::kFlag) text += ", `" + OffFlagName(o, prefix) + "`";
   std::string old;
   for (const auto& [flag, value] : o.deprecated) {

@@ -52,6 +52,7 @@ struct OptionInfo {
   std::string name;      // JSON key path and the name in Check(): "motion_noise.sigma_yaw"
   std::string flag;      // command-line name without dashes: "em-iterations" (see CommandLineName)
   std::string off_flag;  // kFlag: the name that sets false ("huber-loss"; empty: see OffFlagName)
+  char short_flag = 0;   // a one-letter name besides `flag` ('R' for -R), 0 = none
   // Old command-line names: (name, value). An empty value: the old option
   // takes a value; else it is a flag that sets this value.
   std::vector<std::pair<std::string, std::string>> deprecated;
@@ -97,6 +98,8 @@ class OptionTable {
     // The command-line name instead of the field's ("--name": not prefixed).
     Entry& Flag(std::string flag) { return Info([&](OptionInfo& i) { i.flag = std::move(flag); }); }
     Entry& OffFlag(std::string flag) { return Info([&](OptionInfo& i) { i.off_flag = std::move(flag); }); }
+    // A one-letter command-line name besides the long one (-R).
+    Entry& Short(char letter) { return Info([&](OptionInfo& i) { i.short_flag = letter; }); }
     // An old command-line name that still works and prints a note; `value`: see OptionInfo.
     Entry& Deprecated(std::string old_flag, std::string value = "") {
       return Info([&](OptionInfo& i) { i.deprecated.emplace_back(std::move(old_flag), std::move(value)); });

@@ -11,6 +11,7 @@
 #include <cmath>
 
 #include "libsamp/core/error.h"
+#include "libsamp/model/pca_option_table.h"
 #include "libsamp/core/log.h"
 #include "libsamp/model/gram.h"
 
@@ -26,10 +27,7 @@ constexpr Eigen::Index kDenseSolverMaxSamples = 48;
 
 }  // namespace
 
-void PcaOptions::Check() const {
-  SAMP_CHECK(num_components >= 1) << "PcaOptions::num_components must be >= 1, got "
-                                  << num_components;
-}
+void PcaOptions::Check() const { PcaOptionTable().Check(*this); }
 
 PcaResult ComputePca(const Eigen::MatrixXf& samples, const PcaOptions& options) {
   options.Check();

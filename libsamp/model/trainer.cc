@@ -20,8 +20,11 @@
 #include "libsamp/core/log.h"
 #include "libsamp/core/progress.h"
 #include "libsamp/core/util.h"
+#include "libsamp/model/pca_option_table.h"
 #include "libsamp/scan/canonical.h"
 #include "libsamp/scan/mesh_io.h"
+#include "libsamp/scan/scan_option_table.h"
+#include "libsamp/sdf/sdf_option_table.h"
 #include "libsamp/sdf/vdb_io.h"
 
 namespace samp {
@@ -136,49 +139,6 @@ void TrainOptions::Check() const {
   pca.Check();
   if (!preset.empty()) CanonicalPreset(preset);  // throws naming the known presets
 }
-
-namespace {
-
-const char* SdfSignName(SdfOptions::Sign sign) {
-  return sign == SdfOptions::Sign::kCarving ? "carving" : "carving_and_closing";
-}
-
-SdfOptions::Sign ParseSdfSign(const std::string& name) {
-  SAMP_CHECK(name == "carving" || name == "carving_and_closing")
-      << "must be \"carving\" or \"carving_and_closing\", got \"" << name << "\"";
-  return name == "carving" ? SdfOptions::Sign::kCarving : SdfOptions::Sign::kCarvingAndClosing;
-}
-
-}  // namespace
-
-// The trainer options in a model file's metadata: the keys of each nested
-// object, listed once for TrainOptions::ToJson and TrainOptionsFromJson.
-static void OptionFields(OptionsJson& io, ScanOptions& o) {
-  io("num_views", o.num_views);
-  io("width", o.width);
-  io("height", o.height);
-  io("fov_deg", o.fov_deg);
-  io("distance_factor", o.distance_factor);
-}
-
-static void OptionFields(OptionsJson& io, SdfOptions& o) {
-  io("truncation", o.truncation);
-  io("carve_margin", o.carve_margin);
-  io("min_inside_fraction", o.min_inside_fraction);
-  io.Named("sign", o.sign, SdfSignName, ParseSdfSign);
-  io("closing_radius_voxels", o.closing_radius_voxels);
-}
-
-static void OptionFields(OptionsJson& io, SdfQualityOptions& o) {
-  io("min_box_fill", o.min_box_fill);
-  io("borderline_box_fill", o.borderline_box_fill);
-  io("min_largest_component", o.min_largest_component);
-  io("borderline_largest_component", o.borderline_largest_component);
-  io("min_closing_agreement", o.min_closing_agreement);
-  io("borderline_closing_agreement", o.borderline_closing_agreement);
-}
-
-static void OptionFields(OptionsJson& io, PcaOptions& o) { io("num_components", o.num_components); }
 
 std::string TrainOptions::ToJson() const {
   nlohmann::json j;

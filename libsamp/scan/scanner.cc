@@ -5,20 +5,11 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/scan/embree_scene.h"
+#include "libsamp/scan/scan_option_table.h"
 
 namespace samp {
 
-void ScanOptions::Check() const {
-  SAMP_CHECK(num_views >= 1) << "scan: num_views must be >= 1, got " << num_views;
-  SAMP_CHECK(width >= 1 && height >= 1)
-      << "scan: width and height must be >= 1, got " << width << "x" << height;
-  SAMP_CHECK(int64_t(width) * height <= (int64_t(1) << 26))
-      << "scan: width*height too large (" << width << "x" << height << ")";
-  SAMP_CHECK(fov_deg > 0 && fov_deg < 180) << "scan: fov_deg must be in (0, 180), got " << fov_deg;
-  SAMP_CHECK(distance_factor > 1.0)
-      << "scan: distance_factor must be > 1 (cameras outside the bounding sphere), got "
-      << distance_factor;
-}
+void ScanOptions::Check() const { ScanOptionTable().Check(*this); }
 
 std::vector<Eigen::Vector3d> FibonacciSphere(int n) {
   SAMP_CHECK(n >= 1) << "FibonacciSphere: n must be >= 1, got " << n;

@@ -30,38 +30,14 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/sdf/sdf_option_table.h"
 #include "libsamp/sdf/sdf_stages.h"
 
 namespace samp {
 
-void SdfOptions::Check() const {
-  SAMP_CHECK(std::isfinite(truncation) && truncation >= 0.0)
-      << "sdf: truncation must be >= 0 (0 = none), got " << truncation;
-  SAMP_CHECK(std::isfinite(carve_margin) && carve_margin >= 0.0)
-      << "sdf: carve_margin must be >= 0, got " << carve_margin;
-  SAMP_CHECK(min_inside_fraction >= 0.0 && min_inside_fraction <= 1.0)
-      << "sdf: min_inside_fraction must be in [0, 1], got " << min_inside_fraction;
-  SAMP_CHECK(sign == Sign::kCarving || sign == Sign::kCarvingAndClosing)
-      << "sdf: sign must be kCarving or kCarvingAndClosing";
-  SAMP_CHECK(std::isfinite(closing_radius_voxels) && closing_radius_voxels > 0.0 &&
-             closing_radius_voxels <= 16.0)
-      << "sdf: closing_radius_voxels must be in (0, 16], got " << closing_radius_voxels;
-}
+void SdfOptions::Check() const { SdfOptionTable().Check(*this); }
 
-void SdfQualityOptions::Check() const {
-  auto in_unit = [](double v) { return std::isfinite(v) && v >= 0.0 && v <= 1.0; };
-  SAMP_CHECK(in_unit(min_box_fill) && in_unit(borderline_box_fill) && min_box_fill <= borderline_box_fill)
-      << "sdf gate: need 0 <= min_box_fill <= borderline_box_fill <= 1, got " << min_box_fill << ", "
-      << borderline_box_fill;
-  SAMP_CHECK(in_unit(min_largest_component) && in_unit(borderline_largest_component) &&
-             min_largest_component <= borderline_largest_component)
-      << "sdf gate: need 0 <= min_largest_component <= borderline_largest_component <= 1, got "
-      << min_largest_component << ", " << borderline_largest_component;
-  SAMP_CHECK(in_unit(min_closing_agreement) && in_unit(borderline_closing_agreement) &&
-             min_closing_agreement <= borderline_closing_agreement)
-      << "sdf gate: need 0 <= min_closing_agreement <= borderline_closing_agreement <= 1, got "
-      << min_closing_agreement << ", " << borderline_closing_agreement;
-}
+void SdfQualityOptions::Check() const { SdfQualityOptionTable().Check(*this); }
 
 SdfQuality CheckSdfQuality(const Sdf& sdf, const AlignedBox& shape_box, const SdfQualityOptions& options) {
   options.Check();

@@ -68,7 +68,8 @@ void AddTableOptions(CLI::App* command, const std::vector<OptionBinding>& bindin
   for (const OptionBinding& b : bindings) {
     const OptionInfo& info = b.info;
     if (info.internal) continue;
-    const std::string name = CommandLineName(info.flag, prefix);
+    const std::string name =
+        (info.short_flag != 0 ? "-" + std::string(1, info.short_flag) + "," : "") + CommandLineName(info.flag, prefix);
     if (info.kind == OptionKind::kFlag) {
       command->add_flag(name + ",!" + OffFlagName(info, prefix), *b.flag, info.help)
           ->default_str(info.default_text)

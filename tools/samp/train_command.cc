@@ -4,10 +4,27 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/model/pca_option_table.h"
 #include "libsamp/model/trainer.h"
+#include "libsamp/scan/scan_option_table.h"
+#include "libsamp/sdf/sdf_option_table.h"
 #include "tools/samp/commands.h"
+#include "tools/samp/option_cli.h"
 
 namespace samp::tools {
+namespace {
+
+// The options of PCA, scan and SDF as one list (`samp train --help-options markdown`).
+std::vector<OptionInfo> TrainOptionInfos() {
+  std::vector<OptionInfo> infos;
+  for (const std::vector<OptionInfo>& part :
+       {PcaOptionTable().Describe(), ScanOptionTable().Describe(), SdfOptionTable().Describe()}) {
+    infos.insert(infos.end(), part.begin(), part.end());
+  }
+  return infos;
+}
+
+}  // namespace
 
 void RegisterTrainCommand(CLI::App* app) {
   struct Args {
@@ -43,27 +60,24 @@ void RegisterTrainCommand(CLI::App* app) {
       ->check(CLI::IsMember({"shapenet", "apollocar3d"}));
   command->add_option("--sdf-dir", o.sdf_folder,
                       "Also write each model's SDF as <name>.vdb into this folder");
-  command->add_option("-R,--components", o.pca.num_components,
-                      "Number of principal components R (needs >= R + 1 usable models)")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
   command->add_option("--voxel", args->voxel_size,
                       "Voxel size in metres of the car grid (a 6.0 x 2.8 x 2.8 m box around the "
                       "canonical car)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  command->add_option("--views", o.scan.num_views,
-                      "Number of scan viewpoints per model (Fibonacci sphere)")
-      ->capture_default_str()
-      ->check(CLI::PositiveNumber);
   command->add_option("--resolution", args->resolution,
-                      "Width and height in pixels (rays) of each scan view")
+                      "Width and height in pixels (rays) of each scan view (scan.width, scan.height)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  command->add_option("--min-inside", o.sdf.min_inside_fraction,
-                      "Reject a model whose SDF has a smaller inside (negative) fraction of the grid")
-      ->capture_default_str()
-      ->check(CLI::Range(0.0, 1.0));
+  // ScanOptions, SdfOptions, the quality gate and PcaOptions: every field from
+  // their tables (scan/scan_option_table.h, sdf/sdf_option_table.h, model/pca_option_table.h).
+  AddTableOptions(command, PcaOptionTable().Bind(&o.pca), "", "PCA (PcaOptions)");
+  AddTableOptions(command, ScanOptionTable().Bind(&o.scan), "", "Scan (ScanOptions; docs/training.md)");
+  AddTableOptions(command, SdfOptionTable().Bind(&o.sdf), "", "SDF (SdfOptions; docs/sdf.md)");
+  AddTableOptions(command, SdfQualityOptionTable().Bind(&o.gate), "gate-",
+                  "Quality gate (SdfQualityOptions; docs/training.md)");
+  AddHelpOptions(command, {{"markdown", TrainOptionInfos(), ""},
+                           {"gate-markdown", SdfQualityOptionTable().Describe(), "gate-"}});
   command->add_option("--size-variant", args->size_variants,
                       "Also train on each car stretched by these factors of length, height and width "
                       "(repeatable: one copy of every car per occurrence; docs/training.md, Size variants)")
