@@ -118,7 +118,13 @@ void CheckOffHeaderFitsTheFile(const std::string& path, const std::string& text,
 // an end_header without a line break after it, is an error here (assimp would
 // guess, or loop).
 void CheckPlyHeaderFitsTheFile(const std::string& path, const std::string& text, uint64_t file_bytes) {
-  if (text.compare(0, 3, "ply") != 0) return;
+  // assimp takes "ply" in any case as the magic (and loops on a garbled
+  // header behind "plY" as behind "ply").
+  if (text.size() < 3 || std::tolower(static_cast<unsigned char>(text[0])) != 'p' ||
+      std::tolower(static_cast<unsigned char>(text[1])) != 'l' ||
+      std::tolower(static_cast<unsigned char>(text[2])) != 'y') {
+    return;
+  }
   const std::string what = "cannot read mesh '" + path + "'";
   const size_t line_start = text.find("\nend_header");
   SAMP_CHECK(line_start != std::string::npos) << what << ": PLY header without end_header in its first "
