@@ -121,6 +121,26 @@ class OptionsJson {
   void Nested(const std::string& key, S& options) {
     NestedWith(key, [&options](OptionsJson& io) { OptionFields(io, options); });
   }
+  // Nested, written only when it differs from a default-constructed S (as
+  // Optional: outputs of runs that keep the defaults stay as they were); read
+  // when present, S{} otherwise.
+  template <typename S>
+  void OptionalNested(const std::string& key, S& options) {
+    if (writing()) {
+      nlohmann::json child = nlohmann::json::object();
+      nlohmann::json defaults = nlohmann::json::object();
+      OptionsJson child_io(&child);
+      OptionFields(child_io, options);
+      S default_options{};
+      OptionsJson defaults_io(&defaults);
+      OptionFields(defaults_io, default_options);
+      if (child != defaults) (*out_)[key] = std::move(child);
+    } else if (in_->Has(key)) {
+      Nested(key, options);
+    } else {
+      options = S{};
+    }
+  }
   // An array of objects at `key`, the fields of each listed by OptionFields(io, S&).
   template <typename S>
   void Array(const std::string& key, std::vector<S>& items) {

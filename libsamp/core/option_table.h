@@ -211,29 +211,17 @@ class OptionTable {
   void AddNested(const std::string& name, N S::*member, const OptionTable<N>& child,
                  const std::string& flag_prefix) {
     auto shared = std::make_shared<OptionTable<N>>(child);
-    json_.push_back([member, name, shared](OptionsJson& io, S& s) {
-      io.NestedWith(name, [&](OptionsJson& child_io) { shared->Json(child_io, s.*member); });
-    });
-    for (const typename OptionTable<N>::Field& c : child.fields_) {
-      Field f;
-      f.info = c.info;
-      f.info.name = name + "." + c.info.name;
-      auto prefixed = [&flag_prefix](const std::string& flag) {
-        return flag.rfind("--", 0) == 0 ? flag : flag_prefix + flag;
-      };
-      f.info.flag = prefixed(c.info.flag);
-      if (!c.info.off_flag.empty()) f.info.off_flag = prefixed(c.info.off_flag);
-      for (auto& d : f.info.deprecated) d.first = prefixed(d.first);
-      if (c.flag) f.flag = [member, g = c.flag](S* s) { return g(&(s->*member)); };
-      if (c.number) f.number = [member, g = c.number](const S& s) { return g(s.*member); };
-      f.text = [member, g = c.text](const S& s) { return g(s.*member); };
-      f.set = [member, g = c.set](S* s, const std::string& text) { g(&(s->*member), text); };
-      f.copy = [member, g = c.copy](const S& from, S* to) { g(from.*member, &(to->*member)); };
-      for (const auto& [text, holds] : c.rules) {
-        f.rules.emplace_back(text, [member, h = holds](const S& s) { return h(s.*member); });
-      }
-      fields_.push_back(std::move(f));
-    }
+    AddNestedJson(name, member, [shared](OptionsJson& io, N& n) { shared->Json(io, n); });
+    AddNestedFields(name, member, child, flag_prefix);
+  }
+
+  // As AddNested, but the JSON of the nested struct is its OptionFields(io, N&),
+  // for a struct with fields besides its table's (a list).
+  template <typename N>
+  void AddNestedWithOptionFields(const std::string& name, N S::*member, const OptionTable<N>& child,
+                                 const std::string& flag_prefix) {
+    AddNestedJson(name, member, [](OptionsJson& io, N& n) { OptionFields(io, n); });
+    AddNestedFields(name, member, child, flag_prefix);
   }
 
   const std::string& struct_name() const { return struct_name_; }
@@ -301,6 +289,39 @@ class OptionTable {
     std::function<void(const S&, S*)> copy;            // the field from one object to another
     std::vector<std::pair<std::string, std::function<bool(const S&)>>> rules;
   };
+
+  template <typename N, typename Visit>
+  void AddNestedJson(const std::string& name, N S::*member, Visit visit) {
+    json_.push_back([member, name, visit](OptionsJson& io, S& s) {
+      io.NestedWith(name, [&](OptionsJson& child_io) { visit(child_io, s.*member); });
+    });
+  }
+
+  // The child's fields as this table's, named "name.field", flags prefixed.
+  template <typename N>
+  void AddNestedFields(const std::string& name, N S::*member, const OptionTable<N>& child,
+                       const std::string& flag_prefix) {
+    for (const typename OptionTable<N>::Field& c : child.fields_) {
+      Field f;
+      f.info = c.info;
+      f.info.name = name + "." + c.info.name;
+      auto prefixed = [&flag_prefix](const std::string& flag) {
+        return flag.rfind("--", 0) == 0 ? flag : flag_prefix + flag;
+      };
+      f.info.flag = prefixed(c.info.flag);
+      if (!c.info.off_flag.empty()) f.info.off_flag = prefixed(c.info.off_flag);
+      for (auto& d : f.info.deprecated) d.first = prefixed(d.first);
+      if (c.flag) f.flag = [member, g = c.flag](S* s) { return g(&(s->*member)); };
+      if (c.number) f.number = [member, g = c.number](const S& s) { return g(s.*member); };
+      f.text = [member, g = c.text](const S& s) { return g(s.*member); };
+      f.set = [member, g = c.set](S* s, const std::string& text) { g(&(s->*member), text); };
+      f.copy = [member, g = c.copy](const S& from, S* to) { g(from.*member, &(to->*member)); };
+      for (const auto& [text, holds] : c.rules) {
+        f.rules.emplace_back(text, [member, h = holds](const S& s) { return h(s.*member); });
+      }
+      fields_.push_back(std::move(f));
+    }
+  }
 
   Field NewField(const std::string& name, std::string help) const {
     Field f;

@@ -10,6 +10,7 @@
 
 #include "libsamp/core/assignment.h"
 #include "libsamp/core/error.h"
+#include "libsamp/data/calibration_option_table.h"
 #include "libsamp/data/detector_noise.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/sequence_layout.h"
@@ -17,11 +18,8 @@
 namespace samp {
 
 void CalibrationOptions::Check() const {
-  noise.Check();
-  SAMP_CHECK(max_iterations >= 1) << "CalibrationOptions.max_iterations must be >= 1";
-  SAMP_CHECK(tolerance > 0) << "CalibrationOptions.tolerance must be > 0";
-  SAMP_CHECK(tracker_sigma_scale >= 1.0) << "CalibrationOptions.tracker_sigma_scale must be >= 1";
-  box.Check();
+  CalibrationOptionTable().Check(*this);
+  noise.Check();  // the bin edges
 }
 
 std::string CalibrationResult::BriefReport() const {

@@ -12,6 +12,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/pose.h"
+#include "libsamp/data/calibration_option_table.h"
 
 namespace samp {
 namespace {
@@ -536,14 +537,10 @@ DetectorNoiseModel ReadDetectorNoiseModel(const std::string& path) {
 }
 
 void DetectorNoiseOptions::Check() const {
-  SAMP_CHECK(min_track_detections >= 3) << "DetectorNoiseOptions.min_track_detections must be >= 3";
+  DetectorNoiseOptionTable().Check(*this);
   SAMP_CHECK(!bin_edges.empty() && bin_edges.front() >= 0) << "DetectorNoiseOptions.bin_edges must start at >= 0";
   for (size_t i = 1; i < bin_edges.size(); ++i)
     SAMP_CHECK(bin_edges[i] > bin_edges[i - 1]) << "DetectorNoiseOptions.bin_edges must increase";
-  SAMP_CHECK(min_bin_count >= 2) << "DetectorNoiseOptions.min_bin_count must be >= 2";
-  SAMP_CHECK(min_samples >= 2) << "DetectorNoiseOptions.min_samples must be >= 2";
-  SAMP_CHECK(smoother_degree == 1 || smoother_degree == 2) << "DetectorNoiseOptions.smoother_degree must be 1 or 2";
-  SAMP_CHECK(trim_sigmas >= 1.5) << "DetectorNoiseOptions.trim_sigmas must be >= 1.5";
 }
 
 DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequences,
@@ -577,16 +574,7 @@ DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequ
   return model;
 }
 
-void BoxConventionOptions::Check() const {
-  SAMP_CHECK(std::isfinite(max_distance) && max_distance > 0) << "BoxConventionOptions.max_distance must be > 0";
-  SAMP_CHECK(min_points >= 1) << "BoxConventionOptions.min_points must be >= 1";
-  SAMP_CHECK(min_cars >= 1) << "BoxConventionOptions.min_cars must be >= 1";
-  SAMP_CHECK(min_detections >= 1) << "BoxConventionOptions.min_detections must be >= 1";
-  SAMP_CHECK(std::isfinite(min_significance) && min_significance >= 0)
-      << "BoxConventionOptions.min_significance must be >= 0";
-  SAMP_CHECK(max_end_view_deg >= 0 && max_end_view_deg <= 90 && min_side_view_deg >= 0 && min_side_view_deg <= 90)
-      << "BoxConventionOptions.max_end_view_deg and min_side_view_deg must be in [0, 90]";
-}
+void BoxConventionOptions::Check() const { BoxConventionOptionTable().Check(*this); }
 
 int EstimateBoxConvention(const std::vector<BoxConventionSample>& samples, const BoxConventionOptions& o,
                           DetectorNoiseModel* model) {

@@ -33,6 +33,8 @@ void OptionFields(OptionsJson& io, RunFitOptions& o) {
   // Detector calibration (issue 28; run_fit.h), written only when used.
   io.Optional("self_calibrate", o.self_calibrate, false);
   io.Optional("detector_model", o.detector_model_path, std::string());
+  // The self-calibration's options (data/calibration_option_table.h), written when not the defaults.
+  io.OptionalNested("calibration", o.calibration);
 }
 
 void WriteFitConfig(const std::string& path, const FitConfig& config) {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "libsamp/core/json_fields.h"
+#include "libsamp/data/calibration_option_table.h"
 #include "libsamp/data/observation_option_table.h"
 #include "libsamp/data/sequence_option_table.h"
 #include "libsamp/fit/fit_option_table.h"

@@ -24,7 +24,7 @@ inline std::string OtherValue(const OptionInfo& info) {
     case OptionKind::kInt: {
       // The first of a few others that the field's own rule admits.
       const int value = std::stoi(info.default_text);
-      for (int other : {value + 7, value + 2, value - 2, value - 7}) {
+      for (int other : {value + 7, value + 2, value - 2, value - 7, value + 1, value - 1}) {
         if (info.Validate(std::to_string(other)).empty()) return std::to_string(other);
       }
       break;

@@ -4,8 +4,10 @@
 #include <iostream>
 #include <memory>
 
+#include "libsamp/data/calibration_option_table.h"
 #include "libsamp/data/detector_noise.h"
 #include "tools/samp/commands.h"
+#include "tools/samp/option_cli.h"
 
 namespace samp::tools {
 
@@ -32,6 +34,13 @@ void RegisterCalibrateCommand(CLI::App* app) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   command->add_option("-o,--out", args->out, "Detector model JSON to write")->required();
+  const std::string noise_group = "Estimation (DetectorNoiseOptions; docs/detector_calibration.md, \"Options\")";
+  AddTableOptions(command, DetectorNoiseOptionTable().Bind(&args->options.noise), "", noise_group);
+  command->add_option("--bin-edges", args->options.noise.bin_edges,
+                      "Distance bin edges, m, increasing, comma-separated (the last bin is open)")
+      ->delimiter(',')
+      ->capture_default_str()
+      ->group(noise_group);
   AddCommonOptions(command);
   command->callback([args] {
     DetectorCalibrationSummary summary;

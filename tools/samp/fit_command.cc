@@ -9,6 +9,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/pipeline/run_fit.h"
+#include "libsamp/data/calibration_option_table.h"
 #include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/observation_option_table.h"
 #include "libsamp/data/sequence.h"
@@ -114,7 +115,8 @@ void RegisterFitCommand(CLI::App* app) {
                            {"tracker-markdown", TrackerOptionTable().Describe(), "tracker-"},
                            {"observation-markdown", ObservationOptionTable().Describe(), ""},
                            {"stereo-markdown", StereoOptionTable().Describe(), "stereo-"},
-                           {"road-markdown", RoadPlaneOptionTable().Describe(), "road-"}});
+                           {"road-markdown", RoadPlaneOptionTable().Describe(), "road-"},
+                           {"calibration-markdown", CalibrationOptionTable().Describe(), "calibration-"}});
   const std::string observation_group = "Candidate points (ObservationOptions; docs/fitting.md, \"Association\")";
   AddTableOptions(command, ObservationOptionTable().Bind(&o.sequence.observations), "", observation_group);
   AddTableOptions(command, StereoOptionTable().Bind(&o.sequence.stereo), "stereo-",
@@ -126,10 +128,14 @@ void RegisterFitCommand(CLI::App* app) {
                     "smoothed tracks, to a fixed point) and link and fit with it; writes OUT/detector_model.json "
                     "(docs/detector_calibration.md)")
       ->capture_default_str();
-  command->add_flag("--estimate-box-convention", o.calibration.estimate_box_convention,
-                    "With self-calibration: measure the detector's box convention (detected box minus the shape's "
-                    "extent, e.g. KITTI boxes without mirrors) on the near, well-observed cars fitted to their "
-                    "points alone, and fit every car with it (docs/detector_calibration.md, \"Box conventions\")");
+  const std::string calibration_group =
+      "Self-calibration (CalibrationOptions; docs/detector_calibration.md, \"Options\")";
+  AddTableOptions(command, CalibrationOptionTable().Bind(&o.calibration), "calibration-", calibration_group);
+  command->add_option("--calibration-bin-edges", o.calibration.noise.bin_edges,
+                      "Distance bin edges of the noise estimate, m, increasing, comma-separated (the last bin is open)")
+      ->delimiter(',')
+      ->capture_default_str()
+      ->group(calibration_group);
   command->add_option("--detector-model", o.detector_model_path,
                       "A detector model JSON (samp calibrate-detector) giving the tracker's and the fit's "
                       "detector sigmas (instead of --tracker-*-sigma and --self-calibrate)")
