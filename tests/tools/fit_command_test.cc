@@ -184,6 +184,56 @@ TEST(FitCommand, SameNamedSequencesExitOneBeforeFitting) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+// KITTI tracking's own layout through the command line (issue 31): a
+// sequence whose oxts file misses a frame's line, or whose detection file has
+// a line with too few columns, fails with the file and line and writes no
+// labels; the other sequence is fitted; exit status 1.
+TEST(FitCommand, KittiTrackingBadInputNamesFileAndLineAndWritesNothingForIt) {
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("kitti_bad_input");
+  SynthOptions synth = test::QuickSynthOptions(runs + "/kitti", 13, SynthScene::kClean);
+  synth.num_sequences = 2;
+  synth.num_frames = 4;
+  synth.layout = SynthLayout::kKittiTracking;
+  SynthesizeSequences(synth, {{"boxcar", test::MakeBoxCar(4.2)}});
+  const std::string root = runs + "/kitti/training";
+  const std::string detections = runs + "/kitti/detections";
+  // Sequence 0001: the oxts file without its last line (frame 3).
+  const std::string oxts = root + "/oxts/0001.txt";
+  std::string text = test::ReadText(oxts);
+  text.erase(text.find_last_of('\n', text.size() - 2) + 1);
+  { std::ofstream(oxts, std::ios::trunc) << text; }
+  const std::string out = runs + "/out";
+  std::string err;
+  EXPECT_EQ(RunSamp({"fit", "--model", scene.model, "--kitti-tracking", root, "--sequence", "all", "--detections",
+                     detections, "--out", out, "-q"},
+                    runs + "/log", &err),
+            1)
+      << err;
+  EXPECT_NE(err.find(oxts + ":4: no GPS/IMU record for frame 3"), std::string::npos) << err;
+  EXPECT_EQ(LastLine(err), "samp: error: 1 of 2 sequences failed: " + root + "/image_02/0001") << err;
+  EXPECT_FALSE(ReadTrackingLabels(out + "/label_02/0000.txt").empty());
+  EXPECT_FALSE(fs::exists(out + "/label_02/0001.txt"));
+  // Sequence 0000's detections: the second line without its last two columns.
+  const std::string detection_file = detections + "/0000.txt";
+  std::istringstream lines(test::ReadText(detection_file));
+  std::ostringstream cut;
+  int n = 0;
+  for (std::string line; std::getline(lines, line);) {
+    if (++n == 2) line = line.substr(0, line.find_last_of(' ', line.find_last_of(' ') - 1));
+    cut << line << "\n";
+  }
+  { std::ofstream(detection_file, std::ios::trunc) << cut.str(); }
+  EXPECT_EQ(RunSamp({"fit", "--model", scene.model, "--kitti-tracking", root, "--sequence", "0", "--detections",
+                     detections, "--out", runs + "/out2", "-q"},
+                    runs + "/log", &err),
+            1)
+      << err;
+  EXPECT_NE(err.find(detection_file + ":2: 16 columns, expected 17 or 18"), std::string::npos) << err;
+  EXPECT_EQ(LastLine(err), "samp: error: every sequence failed") << err;
+  EXPECT_FALSE(fs::exists(runs + "/out2/label_02/0000.txt"));
+}
+
 // SIGINT while the run writes: the second sequence's --tracks file is a FIFO
 // that nobody writes, so the run blocks there after the first sequence's
 // labels and meshes are in its temporary folder. The interrupted run leaves
