@@ -7,6 +7,8 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/data/detection_files.h"
+#include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/sequence.h"
 #include "libsamp/model/shape_lookup.h"
 #include "libsamp/model/shape_model.h"
@@ -155,30 +157,95 @@ cv::Mat ReadPngOfType(const std::string& path, int type, const cv::Size& size) {
   return image;
 }
 
-bool LoadSequenceInputs(const std::string& directory, const std::vector<EvalMethod>& methods,
-                        SequenceInputs* inputs) {
-  const SequenceFiles files = ListSequence(directory);
-  inputs->directory = directory;
-  inputs->seq = files.name;
-  inputs->layout = SequenceLayout(directory, files.name);
+bool IsKittiTrackingSequence(const std::string& directory) {
+  return ListSequence(directory).layout == SequenceFiles::Layout::kKittiTracking;
+}
+
+namespace {
+
+// samp's layout: ground truth with depth and object maps (gt/).
+bool LoadSampGroundTruth(const EvalOptions& options, const SequenceFiles& files, SequenceInputs* inputs) {
+  inputs->layout = SequenceLayout(inputs->directory, files.name);
   for (const ObjectLabel& l : ReadTrackingLabels(inputs->layout.GroundTruthLabels()))
     inputs->gt_by_frame[l.frame].push_back(l);
-  if (inputs->gt_by_frame.empty()) {
-    LogWarning() << "eval: " << directory << ": no ground-truth labels";
-    return false;
-  }
+  if (inputs->gt_by_frame.empty()) return false;
   // The image size from the first depth map.
   const cv::Mat first_depth =
       ReadPngOfType(inputs->layout.GroundTruthDepth(inputs->gt_by_frame.begin()->first), CV_16UC1, cv::Size());
   inputs->calibration = ReadCalibration(files.calibration, first_depth.cols, first_depth.rows);
   inputs->size = cv::Size(inputs->calibration.camera.width, inputs->calibration.camera.height);
+  for (const auto& [frame, truths] : inputs->gt_by_frame) {
+    inputs->segments[frame] = ReadSegments(*inputs, frame);
+    for (const std::vector<cv::Point>& segment : inputs->segments[frame])
+      inputs->evaluated[frame].push_back(int(segment.size()) >= options.min_segment_pixels);
+  }
+  return true;
+}
+
+// KITTI tracking's layout: ROOT/label_02/<seq>.txt (rectified camera 0, as the
+// labels samp fit writes for such a sequence), no maps; a true car is evaluated
+// by its box height, occlusion and truncation.
+bool LoadKittiGroundTruth(const EvalOptions& options, const SequenceFiles& files, SequenceInputs* inputs) {
+  KittiTrackingLayout layout("", "");
+  SAMP_CHECK(KittiTrackingLayout::FromSequenceFolder(inputs->directory, &layout)) << inputs->directory;
+  const std::string labels = layout.Labels();
+  SAMP_CHECK(fs::is_regular_file(labels)) << "eval: KITTI tracking sequence " << inputs->directory << " has no "
+                                          << labels << " (ground truth: the training split)";
+  for (const ObjectLabel& l : ReadTrackingLabels(labels)) {
+    if (SameObjectType(l.type, "Car")) inputs->gt_by_frame[l.frame].push_back(l);
+  }
+  if (inputs->gt_by_frame.empty()) return false;
+  SAMP_CHECK(!files.frames.empty()) << "eval: " << inputs->directory << ": no images";
+  const PngHeader image = ReadPngHeader(files.frames.front().image_left);
+  inputs->calibration = ReadCalibration(files.calibration, int(image.width), int(image.height));
+  inputs->size = cv::Size(int(image.width), int(image.height));
+  inputs->has_maps = false;
+  for (const auto& [frame, truths] : inputs->gt_by_frame) {
+    for (const ObjectLabel& t : truths) {
+      inputs->evaluated[frame].push_back(t.box_2d[3] - t.box_2d[1] >= options.min_box_height_px &&
+                                         t.occlusion <= options.max_occlusion &&
+                                         t.truncation <= options.max_truncation);
+    }
+  }
+  return true;
+}
+
+// The detections of a KITTI tracking sequence (EvalOptions::detections_path),
+// cars only, in the labels' frame.
+std::map<int, std::vector<ObjectLabel>> ReadKittiDetections(const EvalOptions& options, const SequenceInputs& inputs) {
+  std::map<int, std::vector<ObjectLabel>> labels;
+  const fs::path path = fs::is_directory(options.detections_path)
+                            ? fs::path(options.detections_path) / (inputs.seq + ".txt")
+                            : fs::path(options.detections_path);
+  SAMP_CHECK(fs::is_regular_file(path)) << "eval: no detections of " << inputs.seq << ": " << path.string()
+                                        << " does not exist";
+  for (const ObjectLabel& l : ReadDetectionFile(path.string(), SniffDetectionFormat(path.string()))) {
+    if (SameObjectType(l.type, "Car")) labels[l.frame].push_back(l);
+  }
+  return labels;
+}
+
+}  // namespace
+
+bool LoadSequenceInputs(const EvalOptions& options, const std::string& directory,
+                        const std::vector<EvalMethod>& methods, SequenceInputs* inputs) {
+  const SequenceFiles files = ListSequence(directory);
+  inputs->directory = directory;
+  inputs->seq = files.name;
+  const bool kitti = files.layout == SequenceFiles::Layout::kKittiTracking;
+  if (!(kitti ? LoadKittiGroundTruth(options, files, inputs) : LoadSampGroundTruth(options, files, inputs))) {
+    LogWarning() << "eval: " << directory << ": no ground-truth labels";
+    return false;
+  }
   inputs->labels.assign(methods.size(), {});
   for (size_t m = 0; m < methods.size(); ++m) {
     if (methods[m].name == kStereo) continue;
-    inputs->labels[m] =
-        methods[m].name == kDetections ? ReadDetections(*inputs) : ReadResultLabels(methods[m], inputs->seq);
+    if (methods[m].name == kDetections) {
+      inputs->labels[m] = kitti ? ReadKittiDetections(options, *inputs) : ReadDetections(*inputs);
+    } else {
+      inputs->labels[m] = ReadResultLabels(methods[m], inputs->seq);
+    }
   }
-  for (const auto& [frame, truths] : inputs->gt_by_frame) inputs->segments[frame] = ReadSegments(*inputs, frame);
   return true;
 }
 

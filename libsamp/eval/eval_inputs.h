@@ -69,16 +69,25 @@ struct SequenceInputs {
   // The ground-truth labels by frame, and per frame the object-map segment of
   // each of them (pixels of gt/obj_map equal to track_id + 1).
   std::map<int, std::vector<ObjectLabel>> gt_by_frame;
+  // Empty without ground-truth maps (has_maps false: KITTI tracking's layout).
   std::map<int, std::vector<std::vector<cv::Point>>> segments;
+  bool has_maps = true;
+  // Per frame and truth: evaluated (a segment of at least min_segment_pixels;
+  // without maps, EvalOptions' box height, occlusion and truncation limits).
+  std::map<int, std::vector<bool>> evaluated;
   // Per method: its car labels of this sequence by frame (none for the stereo
   // baseline and for a result without output for this sequence).
   std::vector<std::map<int, std::vector<ObjectLabel>>> labels;
 };
 
+// Whether `directory` is a sequence of KITTI tracking's layout (ground truth
+// without maps).
+bool IsKittiTrackingSequence(const std::string& directory);
+
 // Reads sequence `directory` and the methods' labels of it. false (with a
 // warning) when the sequence has no ground-truth label.
-bool LoadSequenceInputs(const std::string& directory, const std::vector<EvalMethod>& methods,
-                        SequenceInputs* inputs);
+bool LoadSequenceInputs(const EvalOptions& options, const std::string& directory,
+                        const std::vector<EvalMethod>& methods, SequenceInputs* inputs);
 
 // A PNG of the ground truth with the expected pixel type and size (an empty
 // size: any); throws naming the file otherwise.

@@ -11,7 +11,10 @@
 namespace samp {
 
 struct EvalOptions {
-  // Synthetic sequence directories (with gt/).
+  // Synthetic sequence directories (with gt/), or sequences of KITTI tracking's
+  // layout (ROOT/image_02/<seq>, ground truth ROOT/label_02/<seq>.txt): those
+  // have no depth or object maps and are evaluated for pose and tracking only.
+  // The two kinds are not mixed in one evaluation.
   std::vector<std::string> sequences;
   // Results to compare: (name, folder of a `samp fit` output). The folder holds
   // label_02/<seq>.txt and meshes/track_<id>.ply (or <seq>/label_02/..., <seq>/meshes/...).
@@ -34,6 +37,18 @@ struct EvalOptions {
   // Include the raw-stereo shape baseline and the input-detection pose baseline.
   bool stereo_baseline = true;
   bool detection_baseline = true;
+  // KITTI tracking's layout: a true car is evaluated when its 2D box is at
+  // least this tall, its occlusion at most and its truncation at most these
+  // (KITTI's "moderate" difficulty: 25 px, partly occluded, 30 %); the others
+  // are ignored as under min_segment_pixels.
+  double min_box_height_px = 25.0;
+  int max_occlusion = 1;
+  double max_truncation = 0.3;
+  // KITTI tracking's layout: the detections of the detection baseline, a file
+  // (one sequence) or a folder with <seq>.txt per sequence, in any format of
+  // `samp fit --detections` (docs/sequence_format.md); empty: no detection
+  // baseline for such sequences.
+  std::string detections_path;
   // Threads for the per-sequence work (0 = all cores).
   int num_threads = 0;
 

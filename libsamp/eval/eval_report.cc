@@ -258,6 +258,19 @@ void MarkdownShape(const EvalOptions& options, const EvalResults& results, int k
   const std::string tau = Fixed(options.headline_tau, 2);
   const std::vector<MethodShapeResult>& shape_results = k == kPerTrack ? summary.shape : summary.shape_per_frame;
   const std::string matching = std::string(" (") + kMatchingNames[k] + " matching)";
+  if (shape_results.empty()) {
+    if (k != kPerTrack) return;
+    md << "### Shape\n\nNo shape figures: ";
+    if (results.without_maps) {
+      md << "KITTI tracking's ground truth has no depth maps. " << records.size() << " true car-frames evaluated "
+         << "(Car labels with a 2D box of at least " << Fixed(options.min_box_height_px, 0) << " px, occlusion "
+         << "at most " << options.max_occlusion << " and truncation at most " << Fixed(options.max_truncation, 2)
+         << "; " << summary.num_gt_tracks << " tracks, " << options.sequences.size() << " sequences).\n";
+    } else {
+      md << "no method with surfaces (the stereo baseline left out, results without meshes).\n";
+    }
+    return;
+  }
   md << "### Shape at tau = " << tau << " m" << matching << "\n\n";
   const int common_shape = shape_results.empty() ? 0 : shape_results[0].num_evaluated;
   md << common_shape << " car-frames matched by every method (of " << records.size()

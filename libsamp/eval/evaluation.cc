@@ -16,6 +16,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/json_text.h"
+#include "libsamp/core/log.h"
 #include "libsamp/core/progress.h"
 #include "libsamp/core/util.h"
 #include "libsamp/data/kitti_io.h"
@@ -107,7 +108,7 @@ CarFrameWork MakeCarFrame(const eval::SequenceInputs& inputs, const eval::Sequen
   w.record.track_id = truth.track_id;
   w.record.frame = frame;
   w.record.distance = truth.position.norm();
-  w.pixels = inputs.segments.at(frame)[t];
+  if (inputs.has_maps) w.pixels = inputs.segments.at(frame)[t];
   w.record.segment_pixels = int(w.pixels.size());
   w.record.true_size = Eigen::Vector3d(truth.height, truth.width, truth.length);
   for (int k = 0; k < kNumMatchings; ++k) {
@@ -131,7 +132,7 @@ CarFrameWork MakeCarFrame(const eval::SequenceInputs& inputs, const eval::Sequen
   return w;
 }
 
-// The evaluated car-frames (segments of at least min_segment_pixels); the true
+// The evaluated car-frames (SequenceInputs::evaluated); the true
 // cars' names "<seq>/<id>" go to *tracks.
 std::vector<CarFrameWork> CarFrames(const EvalOptions& options, const eval::SequenceInputs& inputs,
                                     const eval::SequenceMatches& matches, const std::vector<EvalMethod>& methods,
@@ -140,7 +141,7 @@ std::vector<CarFrameWork> CarFrames(const EvalOptions& options, const eval::Sequ
   std::vector<CarFrameWork> work;
   for (const auto& [frame, truths] : inputs.gt_by_frame) {
     for (size_t t = 0; t < truths.size(); ++t) {
-      if (int(inputs.segments.at(frame)[t].size()) < options.min_segment_pixels) continue;
+      if (!inputs.evaluated.at(frame)[t]) continue;
       work.push_back(MakeCarFrame(inputs, matches, methods, frame, t, result_meshes));
       tracks->insert(inputs.seq + "/" + std::to_string(truths[t].track_id));
     }
@@ -201,6 +202,7 @@ void ScoreCarFrames(const EvalOptions& options, const eval::SequenceInputs& inpu
                     const std::vector<EvalMethod>& methods,
                     const std::vector<std::unique_ptr<eval::ResultMeshes>>& result_meshes,
                     std::vector<CarFrameWork>* work) {
+  if (!inputs.has_maps) return;  // pose and tracking only
   std::map<int, cv::Mat> depths, disparities;
   for (const CarFrameWork& w : *work) {
     const int f = w.record.frame;
@@ -229,7 +231,7 @@ std::vector<CarFrameRecord> EvaluateSequence(const EvalOptions& options, const s
                                              std::vector<std::unique_ptr<eval::ResultMeshes>>* result_meshes,
                                              std::set<std::string>* tracks, std::vector<TrackingCounts>* tracking) {
   eval::SequenceInputs inputs;
-  if (!eval::LoadSequenceInputs(directory, methods, &inputs)) return {};
+  if (!eval::LoadSequenceInputs(options, directory, methods, &inputs)) return {};
   const eval::SequenceMatches matches = eval::MatchSequence(options, inputs, methods, tracking);
   std::vector<CarFrameWork> work = CarFrames(options, inputs, matches, methods, result_meshes, tracks);
   ScoreCarFrames(options, inputs, methods, *result_meshes, &work);
@@ -279,6 +281,8 @@ void EvalOptions::Check() const {
   SAMP_CHECK(min_segment_pixels >= 1) << "eval: min_segment_pixels must be >= 1";
   SAMP_CHECK(min_iou > 0 && min_iou <= 1) << "eval: min_iou must be in (0, 1]";
   SAMP_CHECK(per_frame_distance > 0) << "eval: per_frame_distance must be > 0";
+  SAMP_CHECK(min_box_height_px >= 0 && max_occlusion >= 0 && max_truncation >= 0 && max_truncation <= 1)
+      << "eval: min_box_height_px, max_occlusion must be >= 0 and max_truncation in [0, 1]";
   SAMP_CHECK(num_threads >= 0) << "eval: num_threads must be >= 0";
 }
 
@@ -294,7 +298,11 @@ std::string EvalOptions::ToJson() const {
                             {"min_iou", min_iou},
                             {"per_frame_distance", per_frame_distance},
                             {"stereo_baseline", stereo_baseline},
-                            {"detection_baseline", detection_baseline}};
+                            {"detection_baseline", detection_baseline},
+                            {"min_box_height_px", min_box_height_px},
+                            {"max_occlusion", max_occlusion},
+                            {"max_truncation", max_truncation},
+                            {"detections", detections_path}};
   return DumpJson(j, 2);
 }
 
@@ -337,10 +345,28 @@ namespace {
 // --link-only`, another tracker's labels) is evaluated for pose and tracking
 // only. A result folder without labels of any given sequence (a wrong path, a
 // fit that wrote nothing) would score 0 % without a word: an error.
+// Sequences of KITTI tracking's layout have no ground-truth maps: no shape
+// figures, no stereo baseline, and the detection baseline only with
+// EvalOptions::detections_path.
 std::vector<EvalMethod> MakeMethods(const EvalOptions& options) {
+  size_t num_kitti = 0;
+  for (const std::string& sequence : options.sequences) num_kitti += eval::IsKittiTrackingSequence(sequence) ? 1 : 0;
+  SAMP_CHECK(num_kitti == 0 || num_kitti == options.sequences.size())
+      << "eval: " << num_kitti << " of the " << options.sequences.size()
+      << " sequences are of KITTI tracking's layout (pose and tracking only): evaluate them apart from "
+         "sequences with ground-truth maps";
+  const bool maps = num_kitti == 0;
+  if (!maps && options.stereo_baseline) {
+    LogInfo() << "eval: KITTI tracking's layout has no depth maps: pose and tracking figures only, no stereo baseline";
+  }
+  if (!maps && options.detection_baseline && options.detections_path.empty()) {
+    LogWarning() << "eval: no detection baseline for KITTI tracking's layout without --detections";
+  }
   std::vector<EvalMethod> methods;
-  if (options.stereo_baseline) methods.push_back({kStereo, "", true, false});
-  if (options.detection_baseline) methods.push_back({kDetections, "", false, true});
+  if (options.stereo_baseline && maps) methods.push_back({kStereo, "", true, false});
+  if (options.detection_baseline && (maps || !options.detections_path.empty())) {
+    methods.push_back({kDetections, "", false, true});
+  }
   auto has_meshes = [](const std::string& folder) {
     if (fs::is_directory(fs::path(folder) / "meshes")) return true;
     for (const auto& entry : fs::directory_iterator(folder))
@@ -359,7 +385,10 @@ std::vector<EvalMethod> MakeMethods(const EvalOptions& options) {
                     << names.size() << " sequence(s): no label_02/<seq>.txt or <seq>/label_02/<seq>.txt for "
                     << names.front() << (names.size() > 1 ? ", ..." : "");
   }
-  for (const auto& [name, folder] : options.results) methods.push_back({name, folder, has_meshes(folder), true});
+  for (const auto& [name, folder] : options.results) {
+    methods.push_back({name, folder, maps && has_meshes(folder), true});
+  }
+  SAMP_CHECK(!methods.empty()) << "eval: nothing to evaluate (no result and no baseline)";
   return methods;
 }
 
@@ -491,6 +520,7 @@ EvalResults ComputeEvaluation(const EvalOptions& options) {
   options.Check();
   EvalResults results;
   results.methods = MakeMethods(options);
+  results.without_maps = eval::IsKittiTrackingSequence(options.sequences.front());
   const std::vector<EvalMethod>& methods = results.methods;
   std::set<std::string> tracks;
   std::vector<TrackingCounts> tracking(methods.size());

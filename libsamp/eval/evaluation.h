@@ -129,6 +129,10 @@ struct EvalResults {
   std::vector<EvalMethod> methods;      // the baselines, then the results in the given order
   std::vector<CarFrameRecord> records;  // every evaluated car-frame, sequence by sequence
   int num_windows = 1;                  // distance windows of the pose statistics
+  // The sequences have no ground-truth maps (KITTI tracking's layout): the
+  // evaluated car-frames are chosen by EvalOptions' box height, occlusion and
+  // truncation, and there are no shape figures.
+  bool without_maps = false;
 };
 
 // Reads the sequences and results and aggregates the scores; writes nothing.

@@ -75,8 +75,8 @@ std::map<int, int> TrackOfCar(const SequenceInputs& inputs, const SequenceMatche
 }
 
 // Per-frame matching of method m by the distance of the origins (MatchTracks),
-// with the CLEAR-MOT counts when `counts` is given. Truths with a segment under
-// min_segment_pixels are ignored.
+// with the CLEAR-MOT counts when `counts` is given. Truths that are not
+// evaluated (SequenceInputs::evaluated) are ignored.
 std::map<int, std::vector<int>> FrameMatch(const EvalOptions& options, const SequenceInputs& inputs, size_t m,
                                            TrackingCounts* counts) {
   std::vector<TrackedBox> truth_boxes, output_boxes;
@@ -87,7 +87,7 @@ std::map<int, std::vector<int>> FrameMatch(const EvalOptions& options, const Seq
       box.frame = frame;
       box.track_id = truths[t].track_id;
       box.position = truths[t].position;
-      box.ignore = int(inputs.segments.at(frame)[t].size()) < options.min_segment_pixels;
+      box.ignore = !inputs.evaluated.at(frame)[t];
       truth_boxes.push_back(box);
     }
     const std::vector<ObjectLabel>& estimates = LabelsAt(inputs, m, frame);

@@ -21,9 +21,11 @@
 #include "libsamp/core/pose.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/kitti_tracking.h"
+#include "libsamp/eval/evaluation.h"
 #include "libsamp/pipeline/run_fit.h"
 #include "libsamp/synth/synth.h"
 #include "tests/synth/test_scene.h"
+#include "tests/testing/expect_error.h"
 
 namespace samp {
 namespace {
@@ -116,6 +118,49 @@ TEST(KittiTrackingLayout, SameLabelsAsSampsLayout) {
   ASSERT_EQ(gt_samp.size(), gt_kitti.size());
   for (size_t i = 0; i < gt_samp.size(); ++i)
     EXPECT_LT((gt_samp[i].position - t2 - gt_kitti[i].position).norm(), 2e-4);
+
+  // samp eval of the KITTI layout (label_02 as the ground truth, the detections
+  // of --detections as the baseline): pose and tracking only, and per car-frame
+  // the same pose errors as the evaluation of the same fit in samp's layout.
+  EvalOptions eval;
+  eval.sequences = {kitti_seq};
+  eval.results = {{"fit", root + "/fit_kitti"}};
+  eval.detections_path = root + "/kitti/detections";
+  eval.output_folder = root + "/eval_kitti";
+  eval.min_box_height_px = 0;
+  const EvalResults kitti_eval = ComputeEvaluation(eval);
+  EXPECT_TRUE(kitti_eval.without_maps);
+  EXPECT_TRUE(kitti_eval.summary.shape.empty());
+  ASSERT_EQ(kitti_eval.summary.pose.size(), 2u);
+  EXPECT_EQ(kitti_eval.summary.pose[0].method, "detections");
+  ASSERT_EQ(kitti_eval.summary.tracking.size(), 1u);
+  EXPECT_EQ(kitti_eval.summary.tracking[0].counts.id_switches, 0);
+  eval.sequences = {samp_seq};
+  eval.results = {{"fit", root + "/fit_samp"}};
+  eval.stereo_baseline = false;  // its disparity was removed above
+  eval.output_folder = root + "/eval_samp";
+  const EvalResults samp_eval = ComputeEvaluation(eval);
+  EXPECT_FALSE(samp_eval.without_maps);
+  std::map<std::pair<int, int>, const CarFrameRecord*> samp_records;
+  for (const CarFrameRecord& r : samp_eval.records) samp_records[{r.track_id, r.frame}] = &r;
+  int compared = 0;
+  for (const CarFrameRecord& r : kitti_eval.records) {
+    const auto found = samp_records.find({r.track_id, r.frame});
+    if (found == samp_records.end()) continue;
+    for (size_t m = 0; m < 2; ++m) {  // detections, fit
+      const MethodCarFrame& a = r.methods[kPerFrame][m];
+      const MethodCarFrame& b = found->second->methods[kPerFrame][m];
+      ASSERT_EQ(a.matched, b.matched) << "track " << r.track_id << " frame " << r.frame;
+      if (!a.matched) continue;
+      EXPECT_NEAR(a.translation_error, b.translation_error, 1e-3) << "track " << r.track_id << " frame " << r.frame;
+      EXPECT_NEAR(a.yaw_error_deg, b.yaw_error_deg, 0.03);
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 10);
+  // Mixed layouts are refused.
+  eval.sequences = {samp_seq, kitti_seq};
+  test::ExpectError([&] { ComputeEvaluation(eval); }, {"1 of the 2 sequences are of KITTI tracking's layout"});
   if (!HasFailure()) fs::remove_all(root);
 }
 

@@ -4,6 +4,7 @@
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
+#include "libsamp/data/kitti_tracking.h"
 #include "libsamp/eval/evaluation.h"
 #include "libsamp/viz/fit_pictures.h"
 #include "tools/samp/commands.h"
@@ -16,6 +17,8 @@ void RegisterEvalCommand(CLI::App* app) {
     std::vector<std::string> results;
     bool no_stereo = false, no_detections = false;
     bool pictures = false;
+    std::string kitti_root;
+    std::string kitti_sequences = "all";
   };
   auto args = std::make_shared<Args>();
   EvalOptions& o = args->options;
@@ -27,9 +30,34 @@ void RegisterEvalCommand(CLI::App* app) {
       "Both matchings (per track, per frame), CLEAR-MOT tracking figures, per-car diagnostics.\n"
       "Writes results.md, results.json, shape.csv, pose.csv, per_object.csv, per_car.csv,\n"
       "tracking.csv and PNG plots.");
-  command->add_option("--seq", o.sequences, "A synthetic sequence folder (with gt/); repeatable")
-      ->required()
+  command->add_option("--seq", o.sequences,
+                      "A synthetic sequence folder (with gt/), or ROOT/image_02/<seq> of KITTI tracking's layout; "
+                      "repeatable")
       ->check(CLI::ExistingDirectory);
+  const std::string kitti_group = "KITTI tracking's layout (pose and tracking figures only; docs/evaluation.md)";
+  command->add_option("--kitti-tracking", args->kitti_root,
+                      "KITTI tracking folder (training/: image_02, calib, label_02 as the ground truth)")
+      ->check(CLI::ExistingDirectory)
+      ->group(kitti_group);
+  command->add_option("--sequence", args->kitti_sequences,
+                      "With --kitti-tracking: sequences, comma-separated (0004,0011) or all")
+      ->capture_default_str()
+      ->group(kitti_group);
+  command->add_option("--detections", o.detections_path,
+                      "The detections of the detection baseline: a file (one sequence) or a folder with <seq>.txt "
+                      "(formats of samp fit --detections)")
+      ->check(CLI::ExistingPath)
+      ->group(kitti_group);
+  command->add_option("--min-box-height", o.min_box_height_px,
+                      "A true car is evaluated when its 2D box is at least this tall, px (KITTI moderate: 25)")
+      ->capture_default_str()
+      ->group(kitti_group);
+  command->add_option("--max-occlusion", o.max_occlusion, "... its occlusion level at most this (0-3)")
+      ->capture_default_str()
+      ->group(kitti_group);
+  command->add_option("--max-truncation", o.max_truncation, "... and its truncation at most this (0-1)")
+      ->capture_default_str()
+      ->group(kitti_group);
   command->add_option("--result", args->results,
                       "NAME=DIR: a `samp fit` output folder to evaluate under NAME; repeatable")
       ->expected(0, -1);
@@ -58,8 +86,15 @@ void RegisterEvalCommand(CLI::App* app) {
                     "Per result and car: the fitted surface coloured by its distance to the true one "
                     "at --tau (OUT/error_surfaces/NAME/<seq>/track_<id>_error.png)");
   AddCommonOptions(command);
-  command->callback([args] {
+  command->callback([args, command] {
+    SAMP_CHECK(command->count("--sequence") == 0 || !args->kitti_root.empty())
+        << "--sequence names sequences of --kitti-tracking; give it (or --seq)";
     EvalOptions options = args->options;
+    if (!args->kitti_root.empty()) {
+      for (const std::string& folder : KittiTrackingSequenceFolders(args->kitti_root, args->kitti_sequences))
+        options.sequences.push_back(folder);
+    }
+    if (options.sequences.empty()) throw CLI::RequiredError("--seq or --kitti-tracking");
     options.stereo_baseline = !args->no_stereo;
     options.detection_baseline = !args->no_detections;
     for (const std::string& result : args->results) {
