@@ -8,7 +8,8 @@ of 21 frames, with memory <= 2 GB". This script measures it (docs/benchmarks.md,
 
   1. `samp synth` one street sequence of --frames frames (default 301) with a slow
      ego car (--max-ego-speed 1 m/s), so that cars stay in view for the whole
-     sequence;
+     sequence (they stand); with --moving, traffic that drives along with the
+     ego car instead (ego 8 m/s straight, cars 7-9 m/s, no parked rows);
   2. `samp fit` it once over all frames (one solve per track, samp's behaviour);
   3. `samp fit --frames A-B` once per window of --window frames (default 21;
      consecutive windows share one frame: 0-20, 20-40, ..., 280-300);
@@ -20,7 +21,7 @@ Every fit runs with --threads 1 (one core: the ratio does not depend on how
 many cores the machine lends). Usage:
 
   python3 tools/long_sequence_benchmark.py --cad CAD_FOLDER [--work DIR] [--samp PATH]
-      [--model MODEL.vdb] [--frames 301] [--window 21] [--seed 11] [--cars 4]
+      [--model MODEL.vdb] [--frames 301] [--window 21] [--seed 11] [--cars 4] [--moving]
 """
 import argparse
 import json
@@ -66,6 +67,7 @@ def main():
     ap.add_argument("--window", type=int, default=21)
     ap.add_argument("--seed", type=int, default=11)
     ap.add_argument("--cars", type=int, default=4)
+    ap.add_argument("--moving", action="store_true", help="traffic driving along with the ego car")
     a = ap.parse_args()
     if a.window < 2 or a.frames < a.window:
         sys.exit("long_sequence_benchmark: need 2 <= --window <= --frames")
@@ -73,8 +75,9 @@ def main():
     work.mkdir(parents=True, exist_ok=True)
     sequences = work / "sequences"
     run([a.samp, "synth", "--cad", a.cad, "--manifest", a.manifest, "--seed", str(a.seed), "--sequences", "1",
-         "--cars-per-sequence", str(a.cars), "--frames", str(a.frames), "--max-ego-speed", "1", "--out",
-         str(sequences), "--quiet"], work / "synth.log")
+         "--cars-per-sequence", str(a.cars), "--frames", str(a.frames), "--out", str(sequences), "--quiet"] +
+        (["--parked-cars", "0", "--min-ego-speed", "8", "--max-ego-speed", "8", "--max-ego-yaw-rate", "0",
+          "--min-speed", "7", "--max-speed", "9"] if a.moving else ["--max-ego-speed", "1"]), work / "synth.log")
     sequence = sequences / "000000"
     fit = [a.samp, "fit", "--seq", str(sequence), "--model", a.model, "--threads", "1", "--quiet"]
 

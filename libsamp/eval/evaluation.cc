@@ -22,6 +22,7 @@
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/sequence.h"
 #include "libsamp/data/stereo.h"
+#include "libsamp/eval/eval_option_table.h"
 #include "libsamp/eval/eval_inputs.h"
 #include "libsamp/eval/eval_report.h"
 #include "libsamp/eval/matching.h"
@@ -275,35 +276,11 @@ void EvalOptions::Check() const {
     SAMP_CHECK(taus[i] > 0 && std::isfinite(taus[i])) << "eval: taus must be > 0";
     SAMP_CHECK(i == 0 || taus[i] > taus[i - 1]) << "eval: taus must be increasing";
   }
-  SAMP_CHECK(std::any_of(taus.begin(), taus.end(), [&](double t) { return std::abs(t - headline_tau) < 1e-9; }))
-      << "eval: headline_tau " << headline_tau << " is not one of taus";
-  SAMP_CHECK(distance_window > 0) << "eval: distance_window must be > 0";
-  SAMP_CHECK(min_segment_pixels >= 1) << "eval: min_segment_pixels must be >= 1";
-  SAMP_CHECK(min_iou > 0 && min_iou <= 1) << "eval: min_iou must be in (0, 1]";
-  SAMP_CHECK(per_frame_distance > 0) << "eval: per_frame_distance must be > 0";
-  SAMP_CHECK(min_box_height_px >= 0 && max_occlusion >= 0 && max_truncation >= 0 && max_truncation <= 1)
-      << "eval: min_box_height_px, max_occlusion must be >= 0 and max_truncation in [0, 1]";
-  SAMP_CHECK(num_threads >= 0) << "eval: num_threads must be >= 0";
+  EvalOptionTable().Check(*this);
 }
 
 std::string EvalOptions::ToJson() const {
-  nlohmann::json results_json = nlohmann::json::array();
-  for (const auto& [name, folder] : results) results_json.push_back({{"name", name}, {"folder", folder}});
-  const nlohmann::json j = {{"sequences", sequences},
-                            {"results", results_json},
-                            {"taus", taus},
-                            {"headline_tau", headline_tau},
-                            {"distance_window", distance_window},
-                            {"min_segment_pixels", min_segment_pixels},
-                            {"min_iou", min_iou},
-                            {"per_frame_distance", per_frame_distance},
-                            {"stereo_baseline", stereo_baseline},
-                            {"detection_baseline", detection_baseline},
-                            {"min_box_height_px", min_box_height_px},
-                            {"max_occlusion", max_occlusion},
-                            {"max_truncation", max_truncation},
-                            {"detections", detections_path}};
-  return DumpJson(j, 2);
+  return DumpJson(OptionsToJson(*this), 2);
 }
 
 size_t EvalSummary::HeadlineIndex() const {
