@@ -167,8 +167,13 @@ class OptionTable {
   // so that files written before the field existed keep their bytes.
   template <typename T>
   Entry AddOptional(const std::string& name, T S::*member, std::string help) {
+    return AddOptional(name, member, std::move(help), S{}.*member);
+  }
+  // The same with the default given (a struct whose S{} GCC 12 wrongly takes
+  // for uninitialised in this template: -Wmaybe-uninitialized).
+  template <typename T>
+  Entry AddOptional(const std::string& name, T S::*member, std::string help, const T& default_value) {
     Entry entry = Add(name, member, std::move(help));
-    const T default_value = S{}.*member;
     json_.back() = [member, name, default_value](OptionsJson& io, S& s) {
       io.Optional(name, s.*member, default_value);
     };
@@ -256,9 +261,11 @@ class OptionTable {
 
   // Every field with its default (that of a default-constructed S).
   std::vector<OptionInfo> Describe() const {
-    const S defaults{};
+    // On the heap: GCC 12 takes a large S on the stack here for uninitialised
+    // (a false -Wmaybe-uninitialized).
+    const auto defaults = std::make_unique<const S>();
     std::vector<OptionInfo> infos;
-    for (const Field& f : fields_) infos.push_back(Described(f, defaults));
+    for (const Field& f : fields_) infos.push_back(Described(f, *defaults));
     return infos;
   }
 

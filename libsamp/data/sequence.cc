@@ -16,6 +16,7 @@
 #include "libsamp/data/kitti_text.h"
 #include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/sequence_layout.h"
+#include "libsamp/data/sequence_option_table.h"
 
 namespace samp {
 namespace fs = std::filesystem;
@@ -56,14 +57,8 @@ void SequenceOptions::Check() const {
   road_plane.Check();
   observations.Check();
   tracker.Check();
+  SequenceOptionTable().Check(*this);
   SAMP_CHECK(!object_types.empty()) << "SequenceOptions.object_types must not be empty";
-  SAMP_CHECK(last_frame < 0 || first_frame < 0 || first_frame <= last_frame)
-      << "SequenceOptions.first_frame = " << first_frame << " is after last_frame = " << last_frame;
-  try {
-    ParseDetectionFormat(detection_format);
-  } catch (const Error& e) {
-    SAMP_THROW() << "SequenceOptions.detection_format: " << e.what();
-  }
   SAMP_CHECK(max_image_bytes > 0) << "SequenceOptions.max_image_bytes must be > 0, is " << max_image_bytes;
 }
 

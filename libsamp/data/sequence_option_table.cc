@@ -1,5 +1,8 @@
 #include "libsamp/data/sequence_option_table.h"
 
+#include "libsamp/data/observation_option_table.h"
+#include "libsamp/data/tracker_option_table.h"
+
 namespace samp {
 
 namespace {
@@ -54,7 +57,50 @@ OptionTable<RoadPlaneOptions> MakeRoadPlaneTable() {
   return t;
 }
 
+OptionTable<SequenceOptions> MakeSequenceTable() {
+  using O = SequenceOptions;
+  OptionTable<O> t("SequenceOptions");
+  t.Add("tracking_labels_path", &O::tracking_labels_path,
+        "a KITTI tracking label file giving the tracks instead of samp's tracker (samp fit --tracks, one per "
+        "sequence)")
+      .Internal();
+  t.Add("min_detection_score", &O::min_detection_score, "detections with a lower score are ignored")
+      .Flag("min-score");
+  t.Add("first_frame", &O::first_frame, "only frames from this one (-1 = the first; samp fit --frames FIRST-LAST)")
+      .Internal()
+      .AtLeast(-1);
+  t.Add("last_frame", &O::last_frame, "... to this one (-1 = the last)")
+      .Internal()
+      .AtLeast(-1)
+      .Rule(">= first_frame", [](const O& o) { return o.last_frame < 0 || o.first_frame < 0 || o.first_frame <= o.last_frame; });
+  t.AddOptional("detections", &O::detections_path,
+                "detections instead of the layout's: a file (kitti-tracking or ab3dmot lines) for one sequence, or "
+                "a folder with <seq>.txt per sequence or <seq>_<ff>.txt per frame (KITTI object)",
+                std::string())
+      .Flag("detections");
+  t.AddOptional("detection_format", &O::detection_format,
+                "format of --detections: auto, kitti-object, kitti-tracking (frame id type ...; ids ignored), "
+                "ab3dmot (frame,type,x1,y1,x2,y2,score,h,w,l,x,y,z,ry,alpha; type 2 = car)",
+                std::string("auto"))
+      .Choices({"auto", "kitti-object", "kitti-tracking", "ab3dmot"});
+  return t;
+}
+
 }  // namespace
+
+const OptionTable<SequenceOptions>& SequenceOptionTable() {
+  static const OptionTable<SequenceOptions> table = MakeSequenceTable();
+  return table;
+}
+
+void OptionFields(OptionsJson& io, SequenceOptions& o) {
+  io.Nested("stereo", o.stereo);
+  io.Nested("road_plane", o.road_plane);
+  io.Nested("observations", o.observations);
+  io.Nested("tracker", o.tracker);
+  SequenceOptionTable().Json(io, o);
+  io("object_types", o.object_types);
+}
 
 const OptionTable<StereoOptions>& StereoOptionTable() {
   static const OptionTable<StereoOptions> table = MakeStereoTable();

@@ -135,7 +135,7 @@ CarFrameWork MakeCarFrame(const eval::SequenceInputs& inputs, const eval::Sequen
 
 // The evaluated car-frames (SequenceInputs::evaluated); the true
 // cars' names "<seq>/<id>" go to *tracks.
-std::vector<CarFrameWork> CarFrames(const EvalOptions& options, const eval::SequenceInputs& inputs,
+std::vector<CarFrameWork> CarFrames(const eval::SequenceInputs& inputs,
                                     const eval::SequenceMatches& matches, const std::vector<EvalMethod>& methods,
                                     std::vector<std::unique_ptr<eval::ResultMeshes>>* result_meshes,
                                     std::set<std::string>* tracks) {
@@ -234,7 +234,7 @@ std::vector<CarFrameRecord> EvaluateSequence(const EvalOptions& options, const s
   eval::SequenceInputs inputs;
   if (!eval::LoadSequenceInputs(options, directory, methods, &inputs)) return {};
   const eval::SequenceMatches matches = eval::MatchSequence(options, inputs, methods, tracking);
-  std::vector<CarFrameWork> work = CarFrames(options, inputs, matches, methods, result_meshes, tracks);
+  std::vector<CarFrameWork> work = CarFrames(inputs, matches, methods, result_meshes, tracks);
   ScoreCarFrames(options, inputs, methods, *result_meshes, &work);
   std::vector<CarFrameRecord> records;
   for (CarFrameWork& w : work) records.push_back(std::move(w.record));

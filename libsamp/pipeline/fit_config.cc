@@ -5,21 +5,6 @@
 
 namespace samp {
 
-void OptionFields(OptionsJson& io, SequenceOptions& o) {
-  io.Nested("stereo", o.stereo);
-  io.Nested("road_plane", o.road_plane);
-  io.Nested("observations", o.observations);
-  io.Nested("tracker", o.tracker);
-  io("tracking_labels_path", o.tracking_labels_path);
-  io("object_types", o.object_types);
-  io("min_detection_score", o.min_detection_score);
-  io("first_frame", o.first_frame);
-  io("last_frame", o.last_frame);
-  // Detection sources (issue 31; data/sequence.h), written only when given.
-  io.Optional("detections", o.detections_path, std::string());
-  io.Optional("detection_format", o.detection_format, std::string("auto"));
-}
-
 void OptionFields(OptionsJson& io, RunFitOptions& o) {
   io("model", o.model_path);
   io("sequences", o.sequences);

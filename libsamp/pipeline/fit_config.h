@@ -16,9 +16,8 @@
 
 namespace samp {
 
-// StereoOptions, RoadPlaneOptions: data/sequence_option_table.h; ObservationOptions:
+// StereoOptions, RoadPlaneOptions, SequenceOptions: data/sequence_option_table.h; ObservationOptions:
 // data/observation_option_table.h; TrackerOptions: data/tracking.h.
-void OptionFields(OptionsJson& io, SequenceOptions& o);
 // MotionNoise, FitOptions: fit/fit_option_table.h (their option tables).
 void OptionFields(OptionsJson& io, RunFitOptions& o);
 

@@ -42,6 +42,35 @@ TEST(SequenceOptionTables, CheckNamesTheFieldTheRuleAndTheValue) {
   test::ExpectError([&] { r.Check(); }, {"RoadPlaneOptions.max_tilt_deg must be in (0, 90), got 90"});
 }
 
+// SequenceOptions' own fields: the rules, and config.json's "sequence" with the
+// nested structs, the object types and the detections only when given.
+TEST(SequenceOptionTables, SequenceOptionsJsonAndRules) {
+  SequenceOptions o;
+  o.first_frame = 9;
+  o.last_frame = 3;
+  test::ExpectError([&] { o.Check(); }, {"SequenceOptions.last_frame must be >= first_frame, got 3"});
+  o = SequenceOptions();
+  o.detection_format = "csv";
+  test::ExpectError([&] { o.Check(); },
+                    {"SequenceOptions.detection_format must be one of auto, kitti-object, kitti-tracking, ab3dmot, "
+                     "got csv"});
+  EXPECT_EQ(JsonKeys(OptionsToJson(SequenceOptions())),
+            (std::vector<std::string>{"first_frame", "last_frame", "min_detection_score", "object_types",
+                                      "observations", "road_plane", "stereo", "tracker", "tracking_labels_path"}));
+  o = SequenceOptions();
+  o.detections_path = "dets";
+  o.detection_format = "ab3dmot";
+  o.object_types = {"Car", "Van"};
+  o.min_detection_score = 0.5;
+  const nlohmann::json j = OptionsToJson(o);
+  EXPECT_EQ(j.at("detections"), "dets");
+  EXPECT_EQ(j.at("detection_format"), "ab3dmot");
+  SequenceOptions read;
+  OptionsFromJson(JsonFields(j, "config.json"), &read);
+  EXPECT_EQ(OptionsToJson(read), j);
+  EXPECT_EQ(read.object_types, o.object_types);
+}
+
 TEST(SequenceOptionTables, EveryFieldIsWiredToItsOwnMember) {
   test::ExpectEveryFieldWired(StereoOptionTable(), "stereo-");
   test::ExpectJsonRoundTrip(StereoOptionTable());
@@ -65,6 +94,10 @@ TEST(SequenceOptionTables, DocsListTheTables) {
             OptionsMarkdown(StereoOptionTable().Describe(), "stereo-"))
       << "docs/sequence_format.md's stereo option list differs from the table: regenerate it with "
          "`samp fit --help-options stereo-markdown`";
+  EXPECT_EQ(test::DocSection(SAMP_SEQUENCE_FORMAT_DOC, "samp fit --help-options input-markdown"),
+            OptionsMarkdown(SequenceOptionTable().Describe()))
+      << "docs/sequence_format.md's input option list differs from the table: regenerate it with "
+         "`samp fit --help-options input-markdown`";
   EXPECT_EQ(test::DocSection(SAMP_SEQUENCE_FORMAT_DOC, "samp fit --help-options road-markdown"),
             OptionsMarkdown(RoadPlaneOptionTable().Describe(), "road-"))
       << "docs/sequence_format.md's road-plane option list differs from the table: regenerate it with "

@@ -75,18 +75,9 @@ void RegisterFitCommand(CLI::App* app) {
       ->group(input_group);
   command->add_option("--frames", source->frames, "Fit only frames FIRST-LAST (e.g. 100-300) of each sequence")
       ->group(input_group);
-  command->add_option("--detections", o.sequence.detections_path,
-                      "Detections instead of the layout's: a file (kitti-tracking or ab3dmot lines) for one "
-                      "sequence, or a folder with <seq>.txt per sequence or <seq>_<ff>.txt per frame (KITTI object)")
-      ->group(input_group);
-  command->add_option("--detection-format", o.sequence.detection_format,
-                      "Format of --detections: auto, kitti-object, kitti-tracking (frame id type ...; ids ignored), "
-                      "ab3dmot (frame,type,x1,y1,x2,y2,score,h,w,l,x,y,z,ry,alpha; type 2 = car)")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"auto", "kitti-object", "kitti-tracking", "ab3dmot"}))
-      ->group(input_group);
-  command->add_option("--min-score", o.sequence.min_detection_score, "Ignore detections with a lower score")
-      ->group(input_group);
+  // SequenceOptions' own options (--detections, --detection-format, --min-score): its table
+  // (data/sequence_option_table.h).
+  AddTableOptions(command, SequenceOptionTable().Bind(&o.sequence), "", input_group);
   command->add_option("--types", source->object_types,
                       "Object types used, comma-separated, case-insensitive (default Car)")
       ->group(input_group);
@@ -116,7 +107,8 @@ void RegisterFitCommand(CLI::App* app) {
                            {"observation-markdown", ObservationOptionTable().Describe(), ""},
                            {"stereo-markdown", StereoOptionTable().Describe(), "stereo-"},
                            {"road-markdown", RoadPlaneOptionTable().Describe(), "road-"},
-                           {"calibration-markdown", CalibrationOptionTable().Describe(), "calibration-"}});
+                           {"calibration-markdown", CalibrationOptionTable().Describe(), "calibration-"},
+                           {"input-markdown", SequenceOptionTable().Describe(), ""}});
   const std::string observation_group = "Candidate points (ObservationOptions; docs/fitting.md, \"Association\")";
   AddTableOptions(command, ObservationOptionTable().Bind(&o.sequence.observations), "", observation_group);
   AddTableOptions(command, StereoOptionTable().Bind(&o.sequence.stereo), "stereo-",
