@@ -18,6 +18,9 @@ OptionTable<DetectorNoiseOptions> MakeDetectorNoiseTable() {
       .AtMost(2);
   t.Add("trim_sigmas", &O::trim_sigmas, "cut-off of the residuals that enter the trimmed statistics, robust sigmas")
       .AtLeast(1.5);
+  t.Add("correct_correlation", &O::correct_correlation,
+        "measure how the errors are correlated between frames and undo what the smoother absorbs of them (off: "
+        "white errors)");
   return t;
 }
 

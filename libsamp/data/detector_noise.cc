@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <numeric>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -13,6 +14,7 @@
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/pose.h"
 #include "libsamp/data/calibration_option_table.h"
+#include "libsamp/data/residual_correlation.h"
 
 namespace samp {
 namespace {
@@ -74,12 +76,19 @@ struct Residual {
   bool has_position = false, has_size = false, has_yaw = false;
 };
 
+// The unit horizontal ray through `position` (camera frame) and the horizontal direction across it.
+void RayAxes(const Eigen::Vector3d& position, Eigen::Vector3d* ray, Eigen::Vector3d* across) {
+  *ray = Eigen::Vector3d(position.x(), 0.0, position.z());
+  const double distance = ray->norm();
+  *ray = distance > 1e-9 ? Eigen::Vector3d(*ray / distance) : Eigen::Vector3d::UnitZ();
+  *across = Eigen::Vector3d(ray->z(), 0.0, -ray->x());
+}
+
 // Decomposes an error vector (camera frame) at `position` along the horizontal ray, across it, vertically.
 void Decompose(const Eigen::Vector3d& position, const Eigen::Vector3d& error, Residual* r) {
-  Eigen::Vector3d ray(position.x(), 0.0, position.z());
-  r->distance = ray.norm();
-  ray = r->distance > 1e-9 ? Eigen::Vector3d(ray / r->distance) : Eigen::Vector3d::UnitZ();
-  const Eigen::Vector3d across(ray.z(), 0.0, -ray.x());
+  Eigen::Vector3d ray, across;
+  RayAxes(position, &ray, &across);
+  r->distance = Eigen::Vector2d(position.x(), position.z()).norm();
   r->along = error.dot(ray);
   r->across = error.dot(across);
   r->vertical = error.y();
@@ -234,7 +243,7 @@ void Summarise(const std::vector<Residual>& residuals, const DetectorNoiseOption
 // weight; iteratively reweighted (Huber, then Tukey-like rejection).
 std::vector<Eigen::Vector3d> SmoothTrack(const std::vector<Eigen::Vector3d>& points,
                                          const std::vector<Eigen::Matrix3d>& information,
-                                         const std::vector<double>& times, int q) {
+                                         const std::vector<double>& times, int q, std::vector<double>* weights) {
   const size_t n = points.size();
   double t_mid = 0;
   for (double t : times) t_mid += t;
@@ -258,6 +267,7 @@ std::vector<Eigen::Vector3d> SmoothTrack(const std::vector<Eigen::Vector3d>& poi
       rhs += robust[i] * a.transpose() * information[i] * points[i];
     }
     x = lhs.ldlt().solve(rhs);
+    if (round == 7) *weights = robust;  // the weights of this last solve
     for (size_t i = 0; i < n; ++i) {
       fitted[i] = row(i) * x;
       const Eigen::Vector3d r = points[i] - fitted[i];
@@ -306,12 +316,28 @@ struct TrackCounts {
   long long flips = 0, directed = 0, spanned = 0, missed = 0;
 };
 
+// The cues whose errors may be correlated in time, in DetectorNoiseModel::correlation's order.
+enum Cue { kAlong, kAcross, kVertical, kHeight, kWidth, kLength, kYaw, kNumCues };
+
+// One confident track's residuals, not yet corrected for the smoother's
+// shrinkage, and per cue the smoother that left them (residual_correlation.h).
+struct TrackResiduals {
+  std::vector<Residual> residuals;
+  SmoothedSeries series[kNumCues];
+};
+
+// The standard deviations along the horizontal ray, across it and vertically of `covariance` at `position`.
+Eigen::Vector3d DecomposedSigmas(const Eigen::Vector3d& position, const Eigen::Matrix3d& covariance) {
+  Eigen::Vector3d ray, across;
+  RayAxes(position, &ray, &across);
+  return Eigen::Vector3d(std::sqrt(ray.dot(covariance * ray)), std::sqrt(across.dot(covariance * across)),
+                         std::sqrt(covariance(1, 1)));
+}
+
 // The residuals of one confident track's detections against its smoothed
-// trajectory, its median box and its axis (scaled for the parameters the
-// smoother and the medians take); counts its flips and interior misses.
-void AddTrackResiduals(const LinkedTrack& track, const std::map<int, const FrameDetections*>& frame_of,
-                       const DetectorNoiseOptions& o, const TrackerOptions& defaults,
-                       std::vector<Residual>* residuals, TrackCounts* counts) {
+// trajectory, its median box and its axis; counts its flips and interior misses.
+TrackResiduals TrackResidualsOf(const LinkedTrack& track, const std::map<int, const FrameDetections*>& frame_of,
+                                const DetectorNoiseOptions& o, const TrackerOptions& defaults, TrackCounts* counts) {
   const int n = static_cast<int>(track.detections.size());
   std::vector<Eigen::Vector3d> points(n);
   std::vector<Eigen::Matrix3d> information(n), rotation(n);
@@ -336,10 +362,8 @@ void AddTrackResiduals(const LinkedTrack& track, const std::map<int, const Frame
   counts->missed += span - n;
 
   const int q = (o.smoother_degree == 2 && n >= 9) ? 3 : 2;
-  const std::vector<Eigen::Vector3d> fitted = SmoothTrack(points, information, times, q);
-  // Residuals of a fit with q parameters per coordinate shrink by (n - q) / n on average.
-  const double position_scale = std::sqrt(double(n) / (n - q));
-  const double one_scale = std::sqrt(double(n) / (n - 1));
+  std::vector<double> robust;
+  const std::vector<Eigen::Vector3d> fitted = SmoothTrack(points, information, times, q, &robust);
   double median_size[3];
   for (int k = 0; k < 3; ++k) {
     std::vector<double> v;
@@ -348,21 +372,92 @@ void AddTrackResiduals(const LinkedTrack& track, const std::map<int, const Frame
   }
   double axis = 0.0;
   const double direction = TrackDirection(headings, fitted, times, &axis);
+  TrackResiduals out;
+  const double t_mid = std::accumulate(times.begin(), times.end(), 0.0) / n;
+  for (int c = 0; c < kNumCues; ++c) {
+    SmoothedSeries& s = out.series[c];
+    const int columns = c <= kVertical ? q : 1;  // the trajectory's polynomial; the median box and axis: a mean
+    s.basis.resize(n, columns);
+    for (int i = 0; i < n; ++i)
+      for (int k = 0; k < columns; ++k) s.basis(i, k) = std::pow(times[i] - t_mid, k);
+    s.weights.assign(n, 1.0);
+    s.used.assign(n, true);
+    s.residuals.resize(n);
+    for (const ObjectLabel& d : track.detections) s.frames.push_back(d.frame);
+  }
   for (int i = 0; i < n; ++i) {
     const ObjectLabel& d = track.detections[i];
     Residual r;
-    const Eigen::Vector3d error_in_camera = rotation[i].transpose() * (points[i] - fitted[i]) * position_scale;
-    Decompose(d.position, error_in_camera, &r);
-    r.size[0] = (d.height - median_size[0]) * one_scale;
-    r.size[1] = (d.width - median_size[1]) * one_scale;
-    r.size[2] = (d.length - median_size[2]) * one_scale;
+    Decompose(d.position, rotation[i].transpose() * (points[i] - fitted[i]), &r);
+    r.size[0] = d.height - median_size[0];
+    r.size[1] = d.width - median_size[1];
+    r.size[2] = d.length - median_size[2];
     r.has_size = true;
-    r.yaw = AxisDifference(headings[i], axis) * one_scale;
+    r.yaw = AxisDifference(headings[i], axis);
     r.has_yaw = true;
-    residuals->push_back(r);
+    out.residuals.push_back(r);
     counts->flips += std::cos(headings[i] - direction) < 0;
     ++counts->directed;
+    // Position cues on the scale of the current model (one scale across tracks), weighted as the smoother weighs them.
+    const Eigen::Vector3d sigma = DecomposedSigmas(d.position, DetectionCovariance(d.position, defaults));
+    const double position[3] = {r.along, r.across, r.vertical};
+    for (int c = kAlong; c <= kVertical; ++c) {
+      SmoothedSeries& s = out.series[c];
+      s.residuals[i] = position[c] / sigma[c];
+      s.weights[i] = robust[i] / (sigma[c] * sigma[c]);
+      s.used[i] = robust[i] > 0;
+    }
+    for (int k = 0; k < 3; ++k) out.series[kHeight + k].residuals[i] = r.size[k];
+    out.series[kYaw].residuals[i] = r.yaw;
   }
+  return out;
+}
+
+// Estimates each cue's correlation between frames from the residuals of every
+// track (or takes 0 = white), and scales each track's residuals to the
+// variance of the errors: a smoother with q parameters per coordinate leaves
+// n - q degrees of freedom of white errors, fewer of correlated ones.
+// Returns a note when the correlation could not be measured.
+std::string CorrectShrinkage(const DetectorNoiseOptions& o, std::vector<TrackResiduals>* tracks,
+                             DetectorNoiseModel* model) {
+  std::string note;
+  double rho[kNumCues] = {0, 0, 0, 0, 0, 0, 0};
+  int fewest_pairs = -1;
+  if (o.correct_correlation) {
+    for (int c = 0; c < kNumCues; ++c) {
+      std::vector<SmoothedSeries> all;
+      for (const TrackResiduals& t : *tracks) all.push_back(t.series[c]);
+      FrameCorrelationOptions co;
+      co.trim_sigmas = o.trim_sigmas;
+      const FrameCorrelation f = EstimateFrameCorrelation(all, co);
+      rho[c] = f.rho;
+      fewest_pairs = fewest_pairs < 0 ? f.num_pairs : std::min(fewest_pairs, f.num_pairs);
+    }
+    const bool measured = fewest_pairs >= FrameCorrelationOptions().min_pairs;
+    if (measured) {
+      std::copy(rho, rho + kNumCues, model->correlation);
+      model->correlation_pairs = fewest_pairs;
+      model->correlation_estimated = true;
+    } else {
+      std::fill(rho, rho + kNumCues, 0.0);
+      note = "correlation: " + std::to_string(std::max(fewest_pairs, 0)) + " pairs of consecutive detections (need " +
+             std::to_string(FrameCorrelationOptions().min_pairs) + "): white errors assumed";
+    }
+  }
+  for (TrackResiduals& t : *tracks) {
+    for (int c = 0; c < kNumCues; ++c) {
+      const double scale = ShrinkageScale(t.series[c], rho[c]);
+      for (Residual& r : t.residuals) {
+        double* value = c == kAlong      ? &r.along
+                        : c == kAcross   ? &r.across
+                        : c == kVertical ? &r.vertical
+                        : c == kYaw      ? &r.yaw
+                                         : &r.size[c - kHeight];
+        *value *= scale;
+      }
+    }
+  }
+  return note;
 }
 
 void CheckModel(const DetectorNoiseModel& m, const std::string& where) {
@@ -399,6 +494,12 @@ double DetectorNoiseModel::MeanSizeSigma() const {
                    3.0);
 }
 
+double DetectorNoiseModel::CorrelationFrames() const {
+  double mean = 0.0;
+  for (double rho : correlation) mean += rho / 7.0;
+  return mean > 1e-3 ? -1.0 / std::log(mean) : 0.0;
+}
+
 void DetectorNoiseModel::ApplyTo(TrackerOptions* t) const {
   t->along_sigma_a = along_sigma_a, t->along_sigma_b = along_sigma_b, t->along_sigma_c = 0.0;
   t->across_sigma_a = across_sigma_a, t->across_sigma_b = across_sigma_b;
@@ -421,7 +522,12 @@ std::string DetectorNoiseModel::BriefReport() const {
     s << " box convention (box - shape) h/w/l " << size_bias[0] << "/" << size_bias[1] << "/" << size_bias[2]
       << " m, along-ray " << along_bias << " m (" << box_convention_tracks << " cars, "
       << box_convention_detections << " detections)";
-  s << " (" << num_size_samples << "); yaw " << yaw_sigma_deg << " deg (" << num_yaw_samples << "); flips "
+  s << " (" << num_size_samples << "); yaw " << yaw_sigma_deg << " deg (" << num_yaw_samples << ")";
+  if (correlation_estimated)
+    s << "; correlation between frames along/across/vertical " << correlation[0] << "/" << correlation[1] << "/"
+      << correlation[2] << ", h/w/l " << correlation[3] << "/" << correlation[4] << "/" << correlation[5]
+      << ", yaw " << correlation[6];
+  s << "; flips "
     << 100 * flip_rate << " %, misses " << 100 * miss_rate << " %, " << false_positives_per_frame
     << " false positives per frame; " << num_tracks << " tracks, " << num_frames << " frames";
   for (const std::string& n : notes) s << "; NOTE: " << n;
@@ -485,6 +591,13 @@ static void BoxConventionFields(OptionsJson& io, DetectorNoiseModel& m) {
   io("along_bias_error", m.along_bias_error);
 }
 
+// The correlation between frames per cue, present only when measured.
+constexpr const char* kCueNames[7] = {"along", "across", "vertical", "height", "width", "length", "yaw"};
+static void CorrelationFields(OptionsJson& io, DetectorNoiseModel& m) {
+  for (int c = 0; c < 7; ++c) io(kCueNames[c], m.correlation[c]);
+  io("pairs", m.correlation_pairs);
+}
+
 std::string DetectorNoiseModel::ToJson() const {
   DetectorNoiseModel& m = const_cast<DetectorNoiseModel&>(*this);  // the writer only reads the fields
   nlohmann::json j = OptionsToJson(m);
@@ -493,6 +606,10 @@ std::string DetectorNoiseModel::ToJson() const {
   if (box_convention_estimated) {
     OptionsJson io(&j);
     io.NestedWith("box_convention", [&m](OptionsJson& box) { BoxConventionFields(box, m); });
+  }
+  if (correlation_estimated) {
+    OptionsJson io(&j);
+    io.NestedWith("correlation", [&m](OptionsJson& c) { CorrelationFields(c, m); });
   }
   return DumpJson(j, 2);
 }
@@ -523,6 +640,13 @@ DetectorNoiseModel DetectorNoiseModelFromJson(const std::string& text, const std
     SAMP_CHECK(std::isfinite(m.along_bias_error) && m.along_bias_error >= 0)
         << source << ": 'box_convention.along_bias_error' must be >= 0";
   }
+  if (f.Has("correlation")) {
+    OptionsJson io(&f);
+    io.NestedWith("correlation", [&m](OptionsJson& c) { CorrelationFields(c, m); });
+    m.correlation_estimated = true;
+    for (double rho : m.correlation)
+      SAMP_CHECK(std::isfinite(rho) && rho >= 0 && rho < 1) << source << ": 'correlation' values must be in [0, 1)";
+  }
   CheckModel(m, source);
   return m;
 }
@@ -549,7 +673,7 @@ DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequ
   defaults.Check();
   DetectorNoiseModel model;
   model.source = "self-calibration";
-  std::vector<Residual> residuals;
+  std::vector<TrackResiduals> tracks;
   TrackCounts counts;
   long long in_confident = 0, all_detections = 0;
   for (const LinkedSequence& seq : sequences) {
@@ -562,10 +686,14 @@ DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequ
       if (n < o.min_track_detections) continue;
       ++model.num_tracks;
       in_confident += n;
-      AddTrackResiduals(track, frame_of, o, defaults, &residuals, &counts);
+      tracks.push_back(TrackResidualsOf(track, frame_of, o, defaults, &counts));
     }
   }
+  const std::string correlation_note = CorrectShrinkage(o, &tracks, &model);
+  std::vector<Residual> residuals;
+  for (const TrackResiduals& t : tracks) residuals.insert(residuals.end(), t.residuals.begin(), t.residuals.end());
   Summarise(residuals, o, /*with_biases=*/false, defaults, &model);
+  if (!correlation_note.empty()) model.notes.push_back(correlation_note);
   model.flip_rate = counts.directed > 0 ? double(counts.flips) / counts.directed : 0.0;
   model.miss_rate = counts.spanned > 0 ? double(counts.missed) / counts.spanned : 0.0;
   model.false_positives_per_frame =

@@ -9,7 +9,8 @@
 //    truth. Each confident track is smoothed over the whole sequence (samp is
 //    offline): a robust (iteratively reweighted, Tukey) polynomial in time of
 //    the bottom centre in the world, the median box, the mean axis; its
-//    detections' residuals give the sigmas. Biases are not observable this way
+//    detections' residuals give the sigmas, corrected for what the smoother
+//    absorbs of errors correlated in time (residual_correlation.h). Biases are not observable this way
 //    (they are reported as 0 and `biases_estimated` is false).
 //  - EstimateDetectorNoiseFromTruth: detections matched to ground-truth boxes
 //    (`samp calibrate-detector`): sigmas and biases.
@@ -69,6 +70,17 @@ struct DetectorNoiseModel {
   int box_convention_tracks = 0, box_convention_detections = 0;
   double size_bias_error[3] = {0.0, 0.0, 0.0};
   double along_bias_error = 0.0;
+  // The correlation of the errors between consecutive frames per cue (along,
+  // across, vertical, height, width, length, yaw), as self-calibration measured
+  // it and corrected the residuals' shrinkage with (residual_correlation.h);
+  // the fewest lag-1 pairs behind a cue. In the JSON as "correlation" only
+  // when measured (every cue from at least 30 pairs).
+  bool correlation_estimated = false;
+  double correlation[7] = {0, 0, 0, 0, 0, 0, 0};
+  int correlation_pairs = 0;
+  // The time constant (frames) of the mean measured correlation, -1 / ln rho
+  // (0: white), for FitOptions::detection_correlation_frames.
+  double CorrelationFrames() const;
   // Sample counts: detections used for the position, size and yaw terms,
   // tracks (or true cars), frames.
   int num_position_samples = 0, num_size_samples = 0, num_yaw_samples = 0;
@@ -107,6 +119,9 @@ struct DetectorNoiseOptions {
   int smoother_degree = 2;
   // Cut-off of the residuals (robust sigmas) that enter the trimmed statistics.
   double trim_sigmas = 3.0;
+  // Measure how the errors are correlated between frames and undo the
+  // smoother's shrinkage of correlated residuals (off: white, n - q).
+  bool correct_correlation = true;
 
   void Check() const;  // throws samp::Error naming the field
 };

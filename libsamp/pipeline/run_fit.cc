@@ -275,6 +275,9 @@ RunFitOptions CalibratedOptions(const RunFitOptions& options, RunFitSummary* sum
   summary->detector_model_used = true;
   if (options.fit.detection_size_sigma > 0)
     effective.fit.detection_size_sigma = summary->detector_model.MeanSizeSigma();
+  // How many independent observations a track's detections are worth, from the measured correlation.
+  if (summary->detector_model.correlation_estimated)
+    effective.fit.detection_correlation_frames = summary->detector_model.CorrelationFrames();
   LogInfo() << summary->calibration_report;
   return effective;
 }

@@ -1,0 +1,146 @@
+#include "libsamp/data/residual_correlation.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+#include "libsamp/core/error.h"
+
+namespace samp {
+namespace {
+
+void CheckSeries(const SmoothedSeries& s) {
+  const size_t n = s.frames.size();
+  SAMP_CHECK(s.residuals.size() == n && s.weights.size() == n && s.used.size() == n &&
+             static_cast<size_t>(s.basis.rows()) == n)
+      << "SmoothedSeries: " << n << " frames but " << s.residuals.size() << " residuals, " << s.weights.size()
+      << " weights, " << s.used.size() << " flags and " << s.basis.rows() << " basis rows";
+  for (size_t i = 1; i < n; ++i)
+    SAMP_CHECK(s.frames[i] > s.frames[i - 1]) << "SmoothedSeries: frames must increase (" << s.frames[i - 1]
+                                               << " then " << s.frames[i] << ")";
+}
+
+// Whether residual i enters the statistics: used and within the trim.
+std::vector<bool> Kept(const SmoothedSeries& s, double limit) {
+  std::vector<bool> kept(s.frames.size());
+  for (size_t i = 0; i < kept.size(); ++i) kept[i] = s.used[i] && std::abs(s.residuals[i]) <= limit;
+  return kept;
+}
+
+double MedianOf(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+// M = C - H C - C H^T + H C H^T with H = A G A^T W, G = (A^T W A)^-1:
+// with P = G A^T W C (q x n) and Q = P W A G (q x q),
+// M_ij = C_ij - a_i^T P_j - a_j^T P_i + a_i^T Q a_j.
+ResidualMoments ExpectedResidualMoments(const SmoothedSeries& s, double rho) {
+  CheckSeries(s);
+  const int n = static_cast<int>(s.frames.size()), q = static_cast<int>(s.basis.cols());
+  ResidualMoments m;
+  m.diagonal.assign(n, 1.0);
+  m.next.assign(n > 0 ? n - 1 : 0, 0.0);
+  if (n == 0) return m;
+  // rho^d up to the distance beyond which it is below 1e-12 (a band of C).
+  const int span = s.frames.back() - s.frames.front();
+  const int reach = rho <= 0 ? 0 : std::min(span, static_cast<int>(std::ceil(std::log(1e-12) / std::log(rho))));
+  std::vector<double> power(span + 1, 0.0);
+  power[0] = 1.0;
+  for (int d = 1; d <= reach; ++d) power[d] = power[d - 1] * rho;
+  for (int i = 0; i + 1 < n; ++i) m.next[i] = power[s.frames[i + 1] - s.frames[i]];
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(q, q);
+  for (int k = 0; k < n; ++k) normal += s.weights[k] * s.basis.row(k).transpose() * s.basis.row(k);
+  if (q == 0 || normal.trace() <= 0) return m;
+  const Eigen::MatrixXd g = normal.ldlt().solve(Eigen::MatrixXd::Identity(q, q));
+  // W A (n x q) times C, column by column: (A^T W C)_j = sum_k w_k a_k C_kj.
+  Eigen::MatrixXd awc = Eigen::MatrixXd::Zero(q, n);
+  for (int k = 0, lo = 0, hi = 0; k < n; ++k) {
+    while (s.frames[k] - s.frames[lo] > reach) ++lo;
+    while (hi + 1 < n && s.frames[hi + 1] - s.frames[k] <= reach) ++hi;
+    if (s.weights[k] == 0) continue;
+    const Eigen::VectorXd wa = s.weights[k] * s.basis.row(k).transpose();
+    for (int j = lo; j <= hi; ++j) awc.col(j) += wa * power[std::abs(s.frames[j] - s.frames[k])];
+  }
+  const Eigen::MatrixXd p = g * awc;
+  Eigen::MatrixXd pwa = Eigen::MatrixXd::Zero(q, q);
+  for (int k = 0; k < n; ++k) pwa += s.weights[k] * p.col(k) * s.basis.row(k);
+  const Eigen::MatrixXd qm = pwa * g;
+  auto entry = [&](int i, int j, double c) {
+    return c - s.basis.row(i).dot(p.col(j)) - s.basis.row(j).dot(p.col(i)) +
+           s.basis.row(i) * qm * s.basis.row(j).transpose();
+  };
+  for (int i = 0; i < n; ++i) m.diagonal[i] = entry(i, i, 1.0);
+  for (int i = 0; i + 1 < n; ++i) m.next[i] = entry(i, i + 1, m.next[i]);
+  return m;
+}
+
+double ShrinkageScale(const SmoothedSeries& s, double rho) {
+  const ResidualMoments m = ExpectedResidualMoments(s, rho);
+  double count = 0, trace = 0;
+  for (size_t i = 0; i < m.diagonal.size(); ++i)
+    if (s.used[i]) count += 1, trace += m.diagonal[i];
+  // A smoother that follows its data almost exactly leaves no information on the scale.
+  constexpr double kMinShare = 0.05;
+  if (count == 0) return 1.0;
+  return std::sqrt(count / std::max(trace, kMinShare * count));
+}
+
+FrameCorrelation EstimateFrameCorrelation(const std::vector<SmoothedSeries>& series,
+                                          const FrameCorrelationOptions& o) {
+  SAMP_CHECK(o.trim_sigmas > 0 && o.max_rho >= 0 && o.max_rho < 1 && o.step > 0)
+      << "FrameCorrelationOptions: trim_sigmas > 0, max_rho in [0, 1) and step > 0 required";
+  std::vector<double> magnitudes;
+  for (const SmoothedSeries& s : series) {
+    CheckSeries(s);
+    for (size_t i = 0; i < s.residuals.size(); ++i)
+      if (s.used[i]) magnitudes.push_back(std::abs(s.residuals[i]));
+  }
+  const double limit = o.trim_sigmas * 1.4826 * MedianOf(magnitudes);
+  FrameCorrelation result;
+  double observed_next = 0, observed_square = 0;
+  std::vector<std::vector<bool>> kept;
+  for (const SmoothedSeries& s : series) {
+    kept.push_back(Kept(s, limit));
+    const std::vector<bool>& k = kept.back();
+    for (size_t i = 0; i < k.size(); ++i) {
+      if (!k[i]) continue;
+      observed_square += s.residuals[i] * s.residuals[i];
+      if (i + 1 < k.size() && k[i + 1]) observed_next += s.residuals[i] * s.residuals[i + 1], ++result.num_pairs;
+    }
+  }
+  if (result.num_pairs < o.min_pairs || observed_square <= 0) return result;
+  result.measured = true;
+  const double observed = observed_next / observed_square;
+  // The gap between the expected ratio at rho and the observed one.
+  auto gap = [&](double rho) {
+    double expected_next = 0, expected_square = 0;
+    for (size_t t = 0; t < series.size(); ++t) {
+      const ResidualMoments m = ExpectedResidualMoments(series[t], rho);
+      const std::vector<bool>& k = kept[t];
+      for (size_t i = 0; i < k.size(); ++i) {
+        if (!k[i]) continue;
+        expected_square += m.diagonal[i];
+        if (i + 1 < k.size() && k[i + 1]) expected_next += m.next[i];
+      }
+    }
+    return std::abs(expected_next / std::max(expected_square, 1e-12) - observed);
+  };
+  // A coarse grid (5 steps), then `step` around its best point.
+  auto search = [&](double from, double to, double step) {
+    double best = from, best_gap = 1e300;
+    for (double rho = from; rho <= to + 1e-12; rho += step) {
+      const double g = gap(rho);
+      if (g < best_gap) best_gap = g, best = rho;
+    }
+    return best;
+  };
+  const double coarse = search(0.0, o.max_rho, 5 * o.step);
+  result.rho = search(std::max(0.0, coarse - 4 * o.step), std::min(o.max_rho, coarse + 4 * o.step), o.step);
+  return result;
+}
+
+}  // namespace samp
