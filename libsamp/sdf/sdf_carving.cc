@@ -24,44 +24,70 @@ constexpr int kCoarseStep = 4;
 constexpr int kCoarseOffset = (kCoarseStep - 1) / 2;
 constexpr int kCell = 8;
 
+// The minimum and maximum depth over the pixels [u0, u1) x [v0, v1), NaNs
+// ignored (+inf and -inf when there are none). std::min(m, x) = x < m ? x : m
+// keeps a non-NaN running value against a NaN, so the result is the same in
+// any order of the pixels (+0 and -0 aside, which every later comparison
+// treats alike); _mm_min_ps(x, m) is x < m ? x : m lane by lane (and
+// _mm_max_ps(x, m) is std::max(m, x)).
+void CellMinMax(const float* depth, int width, int u0, int u1, int v0, int v1, float* lowest,
+                float* highest) {
+  constexpr float kInfinity = std::numeric_limits<float>::infinity();
+  float lo = kInfinity, hi = -kInfinity;
+#if defined(__SSE2__)
+  static_assert(kCell == 8, "a full cell row is two SSE registers");
+  if (u1 - u0 == kCell) {
+    __m128 m0 = _mm_set1_ps(kInfinity), m1 = m0, x0 = _mm_set1_ps(-kInfinity), x1 = x0;
+    const float* row = depth + int64_t(v0) * width + u0;
+    for (int v = v0; v < v1; ++v, row += width) {
+      const __m128 r0 = _mm_loadu_ps(row), r1 = _mm_loadu_ps(row + 4);
+      m0 = _mm_min_ps(r0, m0);
+      m1 = _mm_min_ps(r1, m1);
+      x0 = _mm_max_ps(r0, x0);
+      x1 = _mm_max_ps(r1, x1);
+    }
+    __m128 m = _mm_min_ps(m0, m1), x = _mm_max_ps(x0, x1);
+    m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+    x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(1, 0, 3, 2)));
+    m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
+    x = _mm_max_ps(x, _mm_shuffle_ps(x, x, _MM_SHUFFLE(2, 3, 0, 1)));
+    *lowest = _mm_cvtss_f32(m);
+    *highest = _mm_cvtss_f32(x);
+    return;
+  }
+#endif
+  for (int v = v0; v < v1; ++v) {
+    for (int u = u0; u < u1; ++u) {
+      lo = std::min(lo, depth[int64_t(v) * width + u]);
+      hi = std::max(hi, depth[int64_t(v) * width + u]);
+    }
+  }
+  *lowest = lo;
+  *highest = hi;
+}
+
 // Fills the coarse image and the min/max depth over cells of kCell x kCell
-// pixels, in one pass over the depth image.
+// pixels.
 void BuildViewTables(CarveView* view) {
   const int width = view->width, height = view->height;
   view->coarse_width = std::max(0, (width - 1 - kCoarseOffset) / kCoarseStep + 1);
   view->coarse_height = std::max(0, (height - 1 - kCoarseOffset) / kCoarseStep + 1);
   view->coarse_depth.resize(size_t(view->coarse_width) * size_t(view->coarse_height));
+  for (int cw = 0; cw < view->coarse_height; ++cw) {
+    const float* row = view->depth + int64_t(kCoarseOffset + cw * kCoarseStep) * width + kCoarseOffset;
+    float* coarse = &view->coarse_depth[size_t(cw) * size_t(view->coarse_width)];
+    for (int cu = 0; cu < view->coarse_width; ++cu) coarse[cu] = row[cu * kCoarseStep];
+  }
   view->cell_width = (width + kCell - 1) / kCell;
   view->cell_height = (height + kCell - 1) / kCell;
-  constexpr float kInfinity = std::numeric_limits<float>::infinity();
-  view->cell_min.assign(size_t(view->cell_width) * size_t(view->cell_height), kInfinity);
-  view->cell_max.assign(size_t(view->cell_width) * size_t(view->cell_height), -kInfinity);
-  // Column-wise min/max over the rows of one cell row, then over the columns of each cell.
-  std::vector<float> column_min(static_cast<size_t>(width)), column_max(static_cast<size_t>(width));
+  view->cell_min.resize(size_t(view->cell_width) * size_t(view->cell_height));
+  view->cell_max.resize(view->cell_min.size());
   for (int cw = 0; cw < view->cell_height; ++cw) {
     const int v0 = cw * kCell, v1 = std::min(height, v0 + kCell);
-    std::fill(column_min.begin(), column_min.end(), kInfinity);
-    std::fill(column_max.begin(), column_max.end(), -kInfinity);
-    for (int v = v0; v < v1; ++v) {
-      const float* row = view->depth + int64_t(v) * width;
-      float* lo = column_min.data();
-      float* hi = column_max.data();
-      for (int u = 0; u < width; ++u) {
-        lo[u] = std::min(lo[u], row[u]);
-        hi[u] = std::max(hi[u], row[u]);
-      }
-      if (v >= kCoarseOffset && (v - kCoarseOffset) % kCoarseStep == 0) {
-        float* coarse = &view->coarse_depth[size_t((v - kCoarseOffset) / kCoarseStep) *
-                                            size_t(view->coarse_width)];
-        for (int cu = 0; cu < view->coarse_width; ++cu) coarse[cu] = row[kCoarseOffset + cu * kCoarseStep];
-      }
-    }
-    float* out_min = &view->cell_min[size_t(cw) * size_t(view->cell_width)];
-    float* out_max = &view->cell_max[size_t(cw) * size_t(view->cell_width)];
-    for (int u = 0; u < width; ++u) {
-      const int cu = u / kCell;
-      out_min[cu] = std::min(out_min[cu], column_min[size_t(u)]);
-      out_max[cu] = std::max(out_max[cu], column_max[size_t(u)]);
+    for (int cu = 0; cu < view->cell_width; ++cu) {
+      const size_t c = size_t(cw) * size_t(view->cell_width) + size_t(cu);
+      CellMinMax(view->depth, width, cu * kCell, std::min(width, (cu + 1) * kCell), v0, v1,
+                 &view->cell_min[c], &view->cell_max[c]);
     }
   }
 }
@@ -459,8 +485,8 @@ SlabVoxels GatherSlab(const GridSpec& grid, const std::vector<float>& distance, 
 }
 
 // Decides the 2^3 cells of an undecided block for one view (DecideBlock):
-// carved[a] for the voxels of decided cells; the voxels of undecided cells
-// listed in undecided, their number returned.
+// carved[a] = 1 for the voxels of carved cells (carved[] starts at 0); the
+// voxels of undecided cells listed in undecided, their number returned.
 int DecideCells(const CarveView& view, float margin, const Block& block, Block* cell, Active* segment,
                 uint8_t* carved, int* undecided) {
   int num_undecided = 0;
@@ -472,14 +498,20 @@ int DecideCells(const CarveView& view, float margin, const Block& block, Block* 
       cell[c].stale = false;
     }
     cell[c].seen = block.seen;
-    const BlockDecision cell_decision = DecideBlock(view, cell[c], margin);
-    // Not carved and all in the image: they are in the frustum.
-    const uint8_t seen = uint8_t(cell_decision == BlockDecision::kNoneCarved);
-    for (; a < end; ++a) {
-      carved[a] = uint8_t(cell_decision == BlockDecision::kAllCarved);
-      segment[a].in_frustum |= seen;
-      if (cell_decision == BlockDecision::kUndecided) undecided[num_undecided++] = a;
+    switch (DecideBlock(view, cell[c], margin)) {
+      case BlockDecision::kOutOfView:
+        break;
+      case BlockDecision::kNoneCarved:  // and all in the image: they are in the frustum
+        for (int b = a; b < end; ++b) segment[b].in_frustum = 1;
+        break;
+      case BlockDecision::kAllCarved:
+        std::fill(carved + a, carved + end, uint8_t(1));
+        break;
+      case BlockDecision::kUndecided:
+        for (int b = a; b < end; ++b) undecided[num_undecided++] = b;
+        break;
     }
+    a = end;
   }
   return num_undecided;
 }
@@ -489,12 +521,15 @@ int DecideCells(const CarveView& view, float margin, const Block& block, Block* 
 // voxels (in order) to the start of the segment; returns how many.
 int CarveCells(const CarveView& view, const VoxelCarver& carver, float margin, Block* block, Block* cell,
                Active* segment) {
-  uint8_t carved[kBlock * kBlock * kBlock];
+  uint8_t carved[kBlock * kBlock * kBlock] = {};
   int undecided[kBlock * kBlock * kBlock];
   const int num_undecided = DecideCells(view, margin, *block, cell, segment, carved, undecided);
   carver.Test(segment, undecided, num_undecided, carved);
+  // The voxels before the first carved one stay where they are.
   int kept = 0;
-  for (int a = 0; a < block->count; ++a) {
+  while (kept < block->count && !carved[kept]) ++kept;
+  if (kept == block->count) return kept;
+  for (int a = kept; a < block->count; ++a) {
     if (carved[a]) {
       Block& owner = cell[segment[a].cell];
       --owner.count;

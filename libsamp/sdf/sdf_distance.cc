@@ -26,42 +26,74 @@ inline Vec3 ClosestOnSegment(const Vec3& p, const Vec3& a, const Vec3& b) {
   return a + t * ab;
 }
 
-inline Vec3 ClosestOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const float d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0f && d2 <= 0.0f) return a;
-  const Vec3 bp = p - b;
-  const float d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0f && d4 <= d3) return b;
+// Nearest of the three edges of a degenerate (zero-area) triangle.
+Vec3 ClosestOnDegenerate(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
+  const Vec3 q0 = ClosestOnSegment(p, a, b), q1 = ClosestOnSegment(p, b, c), q2 = ClosestOnSegment(p, c, a);
+  const float e0 = (p - q0).squaredNorm(), e1 = (p - q1).squaredNorm(), e2 = (p - q2).squaredNorm();
+  return e0 <= e1 ? (e0 <= e2 ? q0 : q2) : (e1 <= e2 ? q1 : q2);
+}
+
+// u . v summed in the order of Eigen's dot of 3-vectors (x + (y + z)).
+inline float Dot(float ux, float uy, float uz, float vx, float vy, float vz) {
+  return ux * vx + (uy * vy + uz * vz);
+}
+
+// A triangle's corners and edges (ab = b - a, ac = c - a, bc = c - b) for
+// ClosestOnTriangle.
+struct TriangleEdges {
+  Vec3 a, b, c, ab, ac, bc;
+  explicit TriangleEdges(const Triangle& t) : a(t.a), b(t.b), c(t.c), ab(t.b - t.a), ac(t.c - t.a), bc(t.c - t.b) {}
+};
+
+// Closest point q to p on triangle (a, b, c): Ericson, Real-Time Collision
+// Detection, 5.1.5: the Voronoi region of p (a corner, an edge or the face)
+// from the dot products d1..d6 of the edges ab, ac with p - a, p - b, p - c
+// and the barycentric numerators va, vb, vc; with a fallback for degenerate
+// triangles. Scalar float operations, each in the same order as the
+// Eigen-vector form of the same formulas.
+inline void ClosestOnTriangle(const TriangleEdges& t, float px, float py, float pz, float* qx, float* qy,
+                              float* qz) {
+  const Vec3 &a = t.a, &b = t.b, &c = t.c, &ab = t.ab, &ac = t.ac;
+  auto set = [&](float x, float y, float z) { *qx = x, *qy = y, *qz = z; };
+  const float apx = px - a.x(), apy = py - a.y(), apz = pz - a.z();
+  const float d1 = Dot(ab.x(), ab.y(), ab.z(), apx, apy, apz), d2 = Dot(ac.x(), ac.y(), ac.z(), apx, apy, apz);
+  if (d1 <= 0.0f && d2 <= 0.0f) return set(a.x(), a.y(), a.z());
+  const float bpx = px - b.x(), bpy = py - b.y(), bpz = pz - b.z();
+  const float d3 = Dot(ab.x(), ab.y(), ab.z(), bpx, bpy, bpz), d4 = Dot(ac.x(), ac.y(), ac.z(), bpx, bpy, bpz);
+  if (d3 >= 0.0f && d4 <= d3) return set(b.x(), b.y(), b.z());
   const float vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {
+  if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {  // edge ab
     const float denom = d1 - d3;
-    return denom > 0.0f ? Vec3(a + (d1 / denom) * ab) : a;
+    if (!(denom > 0.0f)) return set(a.x(), a.y(), a.z());
+    const float v = d1 / denom;
+    return set(a.x() + v * ab.x(), a.y() + v * ab.y(), a.z() + v * ab.z());
   }
-  const Vec3 cp = p - c;
-  const float d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0f && d5 <= d6) return c;
+  const float cpx = px - c.x(), cpy = py - c.y(), cpz = pz - c.z();
+  const float d5 = Dot(ab.x(), ab.y(), ab.z(), cpx, cpy, cpz), d6 = Dot(ac.x(), ac.y(), ac.z(), cpx, cpy, cpz);
+  if (d6 >= 0.0f && d5 <= d6) return set(c.x(), c.y(), c.z());
   const float vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {
+  if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {  // edge ac
     const float denom = d2 - d6;
-    return denom > 0.0f ? Vec3(a + (d2 / denom) * ac) : a;
+    if (!(denom > 0.0f)) return set(a.x(), a.y(), a.z());
+    const float w = d2 / denom;
+    return set(a.x() + w * ac.x(), a.y() + w * ac.y(), a.z() + w * ac.z());
   }
   const float va = d3 * d6 - d5 * d4;
-  if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f) {
+  if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f) {  // edge bc
     const float denom = (d4 - d3) + (d5 - d6);
-    return denom > 0.0f ? Vec3(b + ((d4 - d3) / denom) * (c - b)) : b;
+    if (!(denom > 0.0f)) return set(b.x(), b.y(), b.z());
+    const float w = (d4 - d3) / denom;
+    return set(b.x() + w * t.bc.x(), b.y() + w * t.bc.y(), b.z() + w * t.bc.z());
   }
   const float sum = va + vb + vc;
   if (!(sum > 0.0f)) {
-    // Degenerate (zero-area) triangle: nearest of its three edges.
-    const Vec3 q0 = ClosestOnSegment(p, a, b), q1 = ClosestOnSegment(p, b, c),
-               q2 = ClosestOnSegment(p, c, a);
-    const float e0 = (p - q0).squaredNorm(), e1 = (p - q1).squaredNorm(),
-                e2 = (p - q2).squaredNorm();
-    return e0 <= e1 ? (e0 <= e2 ? q0 : q2) : (e1 <= e2 ? q1 : q2);
+    const Vec3 q = ClosestOnDegenerate(Vec3(px, py, pz), a, b, c);
+    return set(q.x(), q.y(), q.z());
   }
+  // Inside the face: q = a + ab v + ac w, v = vb / sum, w = vc / sum.
   const float denom = 1.0f / sum;
-  return a + ab * (vb * denom) + ac * (vc * denom);
+  const float v = vb * denom, w = vc * denom;
+  set((a.x() + ab.x() * v) + ac.x() * w, (a.y() + ab.y() * v) + ac.y() * w, (a.z() + ab.z() * v) + ac.z() * w);
 }
 
 // |p - q|^2 summed in the order of Eigen's squaredNorm (x^2 + (y^2 + z^2)),
@@ -226,6 +258,7 @@ void SeedBand(const GridSpec& grid, const std::vector<Triangle>& all,
   const int nx = grid.dims.x(), ny = grid.dims.y();
   for (const int32_t t : triangles) {
     const Triangle& tri = all[size_t(t)];
+    const TriangleEdges edges(tri);
     const Vec3 lo = ((tri.a.cwiseMin(tri.b).cwiseMin(tri.c) - origin) * inv_h).array() - band_voxels;
     const Vec3 hi = ((tri.a.cwiseMax(tri.b).cwiseMax(tri.c) - origin) * inv_h).array() + band_voxels;
     const int i0 = std::max(0, int(std::ceil(lo.x()))), i1 = std::min(nx - 1, int(std::floor(hi.x())));
@@ -243,14 +276,15 @@ void SeedBand(const GridSpec& grid, const std::vector<Triangle>& all,
         for (int i = i0; i <= i1; ++i, ++v) {
           const float s = s0 + ds * float(i);
           if (s * s > band2) continue;
-          const Vec3 p(row.x() + h * float(i), row.y(), row.z());
-          const Vec3 q = ClosestOnTriangle(p, tri.a, tri.b, tri.c);
-          const float d2 = (p - q).squaredNorm();
+          const float px = row.x() + h * float(i);
+          float qx, qy, qz;
+          ClosestOnTriangle(edges, px, row.y(), row.z(), &qx, &qy, &qz);
+          const float d2 = SquaredDistance(px - qx, row.y() - qy, row.z() - qz);
           if (d2 < field->squared[size_t(v)]) {
             field->squared[size_t(v)] = d2;
-            field->x[size_t(v)] = q.x();
-            field->y[size_t(v)] = q.y();
-            field->z[size_t(v)] = q.z();
+            field->x[size_t(v)] = qx;
+            field->y[size_t(v)] = qy;
+            field->z[size_t(v)] = qz;
           }
         }
       }
