@@ -93,7 +93,8 @@ TEST(TrainOptionTables, TrainOptionsRulesAndJson) {
   o.output_path = "m.vdb";
   EXPECT_NO_THROW(o.Check());
   o.preset = "kitti";
-  test::ExpectError([&] { o.Check(); }, {"TrainOptions.preset must be empty or one of shapenet, apollocar3d, got kitti"});
+  test::ExpectError([&] { o.Check(); },
+                    {"TrainOptions.preset must be empty or one of shapenet, apollocar3d, got kitti"});
   o.preset = "shapenet";
   o.size_variants = {Eigen::Vector3d(1.0, 1.1, 2.5)};
   test::ExpectError([&] { o.Check(); }, {"TrainOptions.size_variants must be in [0.5, 2], got 1,1.1,2.5"});

@@ -39,7 +39,8 @@ TEST(RunFitOptionTable, CheckNamesTheFieldTheRuleAndTheValue) {
   test::ExpectError([&] { o.Check(); }, {"RunFitOptions.sequences must be given (at least one --seq), got "});
   o = ValidOptions();
   o.tracking_labels = {"a.txt", "b.txt"};
-  test::ExpectError([&] { o.Check(); }, {"RunFitOptions.tracking_labels must be empty or one per sequence, got a.txt,b.txt"});
+  test::ExpectError([&] { o.Check(); },
+                    {"RunFitOptions.tracking_labels must be empty or one per sequence, got a.txt,b.txt"});
   o = ValidOptions();
   o.output_dir.clear();
   test::ExpectError([&] { o.Check(); }, {"RunFitOptions.output_dir must be given, got "});

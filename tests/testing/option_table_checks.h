@@ -141,7 +141,9 @@ void ExpectEveryFieldWired(const OptionTable<S>& table, const std::string& prefi
     for (const OptionBinding& b : table.Bind(&options)) {
       if (b.info.name != info.name) continue;
       const std::string value = OtherValue(info);
-      EXPECT_EQ(b.info.Validate(value), "") << info.name << " = " << value;
+      for (const std::string& part : info.list ? SplitOptionList(value) : std::vector<std::string>{value}) {
+        EXPECT_EQ(b.info.Validate(part), "") << info.name << " = " << value;
+      }
       b.set(value);
     }
     std::map<std::string, std::string> changed = TableLeaves(options, nested);

@@ -50,7 +50,9 @@ void ExpectEachBindingSetsItsMember(const OptionTable<S>& table) {
       if (b.info.name == info.name) b.set(test::OtherValue(info));
     }
     for (const OptionBinding& b : table.Bind(&o)) after[b.info.name] = b.info.default_text;
-    for (const auto& [name, text] : before) EXPECT_EQ(after[name] != text, name == info.name) << info.name << ": " << name;
+    for (const auto& [name, text] : before) {
+      EXPECT_EQ(after[name] != text, name == info.name) << info.name << ": " << name;
+    }
   }
 }
 

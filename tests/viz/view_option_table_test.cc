@@ -37,7 +37,9 @@ TEST(ViewOptionTables, EveryOptionSetsItsOwnMember) {
       if (b.info.name == info.name) b.set(test::OtherValue(info));
     }
     for (const OptionBinding& b : FitVisualsOptionTable().Bind(&o)) after[b.info.name] = b.info.default_text;
-    for (const auto& [name, text] : before) EXPECT_EQ(after[name] != text, name == info.name) << info.name << ": " << name;
+    for (const auto& [name, text] : before) {
+      EXPECT_EQ(after[name] != text, name == info.name) << info.name << ": " << name;
+    }
   }
 }
 
