@@ -79,8 +79,17 @@ CLI::Option* AddValue(CLI::App* command, const OptionBinding& b, const std::stri
   const OptionInfo& info = b.info;
   CLI::Option* option = nullptr;
   if (info.list) {
+    // A list whose values do not make whole items (3 numbers each) is a usage error, as a bad value.
     option = command->add_option_function<std::vector<std::string>>(
-        name, [set = b.set_list](const std::vector<std::string>& values) { set(values); }, info.help);
+        name,
+        [set = b.set_list, name](const std::vector<std::string>& values) {
+          try {
+            set(values);
+          } catch (const Error& e) {
+            throw CLI::ValidationError(name, e.what());
+          }
+        },
+        info.help);
     option->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
     if (info.arity > 1) option->expected(info.arity);
     if (info.separator != 0) option->delimiter(info.separator);
