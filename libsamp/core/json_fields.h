@@ -71,6 +71,8 @@ class OptionsJson {
   explicit OptionsJson(const JsonFields* in) : in_(in) {}
 
   bool writing() const { return out_ != nullptr; }
+  // Reading: whether the JSON holds `key`.
+  bool Has(const std::string& key) const { return in_ != nullptr && in_->Has(key); }
 
   template <typename T>
   void operator()(const std::string& key, T& value) {

@@ -61,6 +61,24 @@ double ParseOptionDouble(const std::string& text) {
   return value;
 }
 
+std::string JoinOptionList(const std::vector<std::string>& values) {
+  std::string text;
+  for (size_t k = 0; k < values.size(); ++k) text += (k ? "," : "") + values[k];
+  return text;
+}
+
+std::vector<std::string> SplitOptionList(const std::string& text) {
+  std::vector<std::string> values;
+  if (text.empty()) return values;
+  size_t start = 0;
+  for (size_t comma = text.find(','); comma != std::string::npos; comma = text.find(',', start)) {
+    values.push_back(text.substr(start, comma - start));
+    start = comma + 1;
+  }
+  values.push_back(text.substr(start));
+  return values;
+}
+
 std::string OptionInfo::Validate(const std::string& text) const {
   try {
     double number = 0.0;
@@ -79,7 +97,7 @@ std::string OptionInfo::Validate(const std::string& text) const {
         break;
       case OptionKind::kText:
       case OptionKind::kChoice:
-        if (choices.empty()) return "";
+        if (choices.empty() || (empty_choice && text.empty())) return "";
         for (const std::string& c : choices) {
           if (c == text) return "";
         }
@@ -96,15 +114,34 @@ namespace {
 
 std::string CommandLine(const OptionInfo& o, const std::string& prefix) {
   if (o.internal) return "internal";
-  std::string text = "`" + CommandLineName(o.flag, prefix) + "`";
+  std::string text = "`" + CommandLineName(o, prefix) + "`";
+  if (o.kind == OptionKind::kFlag && o.flag_names == FlagNames::kOffOnly) text = "`" + OffFlagName(o, prefix) + "`";
   if (o.short_flag != 0) text = "`-" + std::string(1, o.short_flag) + "`, " + text;
-  if (o.kind == OptionKind::kFlag) text += ", `" + OffFlagName(o, prefix) + "`";
+  if (o.kind == OptionKind::kFlag && o.flag_names == FlagNames::kOnAndOff) text += ", `" + OffFlagName(o, prefix) + "`";
+  if (o.positional) text += " (positional)";
+  if (o.list) {
+    text += o.arity > 1 ? " " + std::to_string(o.arity) + " values" : "";
+    text += o.separator == ',' ? " (comma-separated)"
+            : o.separator != 0 ? std::string(" (") + o.separator + "-separated)"
+                               : " (repeatable)";
+  }
+  if (o.required) text += ", required";
   std::string old;
   for (const auto& [flag, value] : o.deprecated) {
     old += (old.empty() ? "" : ", ") + ("`" + CommandLineName(flag, prefix) + "`") + (value.empty() ? "" : " = " + value);
   }
   if (!old.empty()) text += " (deprecated: " + old + ")";
   return text;
+}
+
+// The rules of the docs: the table's and that of a path.
+std::string RuleColumn(const OptionInfo& o) {
+  const char* path = o.path == OptionPath::kExistingFile        ? "an existing file"
+                     : o.path == OptionPath::kExistingDirectory ? "an existing folder"
+                     : o.path == OptionPath::kExistingPath      ? "an existing file or folder"
+                                                                : "";
+  if (*path == '\0') return o.rule_text;
+  return o.rule_text.empty() ? path : o.rule_text + "; " + path;
 }
 
 std::string Escaped(const std::string& text) {
@@ -122,6 +159,10 @@ std::string CommandLineName(const std::string& flag, const std::string& prefix) 
   return flag.rfind("--", 0) == 0 ? flag : "--" + prefix + flag;
 }
 
+std::string CommandLineName(const OptionInfo& info, const std::string& prefix) {
+  return info.positional ? info.flag : CommandLineName(info.flag, prefix);
+}
+
 std::string OffFlagName(const OptionInfo& info, const std::string& prefix) {
   if (!info.off_flag.empty()) return CommandLineName(info.off_flag, prefix);
   return "--no-" + CommandLineName(info.flag, prefix).substr(2);
@@ -133,7 +174,7 @@ std::string OptionsMarkdown(const std::vector<OptionInfo>& options, const std::s
   s << "|---|---|---|---|---|\n";
   for (const OptionInfo& o : options) {
     s << "| " << o.name << " | " << CommandLine(o, prefix) << " | " << Escaped(o.default_text) << " | "
-      << Escaped(o.rule_text) << " | " << Escaped(o.help) << " |\n";
+      << Escaped(RuleColumn(o)) << " | " << Escaped(o.help) << " |\n";
   }
   return s.str();
 }

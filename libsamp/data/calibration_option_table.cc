@@ -1,5 +1,8 @@
 #include "libsamp/data/calibration_option_table.h"
 
+#include <algorithm>
+#include <functional>
+
 namespace samp {
 
 namespace {
@@ -7,6 +10,13 @@ namespace {
 OptionTable<DetectorNoiseOptions> MakeDetectorNoiseTable() {
   using O = DetectorNoiseOptions;
   OptionTable<O> t("DetectorNoiseOptions");
+  t.AddList("bin_edges", &O::bin_edges, "distance bin edges, m, increasing, comma-separated (the last bin is open)")
+      .Separator(',')
+      .NonNegative()
+      .Rule("a non-empty increasing list", [](const O& o) {
+        return !o.bin_edges.empty() && std::adjacent_find(o.bin_edges.begin(), o.bin_edges.end(),
+                                                           std::greater_equal<double>()) == o.bin_edges.end();
+      });
   t.Add("min_track_detections", &O::min_track_detections, "tracks with fewer detections are not used").AtLeast(3);
   t.Add("min_bin_count", &O::min_bin_count, "a distance bin with fewer detections does not enter the sigma(d) fit")
       .AtLeast(2);
@@ -50,7 +60,7 @@ OptionTable<BoxConventionOptions> MakeBoxConventionTable() {
 OptionTable<CalibrationOptions> MakeCalibrationTable() {
   using O = CalibrationOptions;
   OptionTable<O> t("CalibrationOptions");
-  t.AddNestedWithOptionFields("noise", &O::noise, DetectorNoiseOptionTable(), "");
+  t.AddNested("noise", &O::noise, DetectorNoiseOptionTable(), "");
   t.Add("max_iterations", &O::max_iterations, "re-linkings with the estimate at most, to a fixed point").AtLeast(1);
   t.Add("tolerance", &O::tolerance, "the fixed point: every sigma changed by less than this share").Positive();
   t.Add("tracker_sigma_scale", &O::tracker_sigma_scale,
@@ -81,10 +91,7 @@ const OptionTable<CalibrationOptions>& CalibrationOptionTable() {
   return table;
 }
 
-void OptionFields(OptionsJson& io, DetectorNoiseOptions& o) {
-  DetectorNoiseOptionTable().Json(io, o);
-  io("bin_edges", o.bin_edges);
-}
+void OptionFields(OptionsJson& io, DetectorNoiseOptions& o) { DetectorNoiseOptionTable().Json(io, o); }
 
 void OptionFields(OptionsJson& io, BoxConventionOptions& o) { BoxConventionOptionTable().Json(io, o); }
 void OptionFields(OptionsJson& io, CalibrationOptions& o) { CalibrationOptionTable().Json(io, o); }

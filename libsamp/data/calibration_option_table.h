@@ -1,6 +1,5 @@
 // The option tables of the detector's noise model estimation (core/option_table.h):
-// every field of DetectorNoiseOptions (but its bin edges, a list),
-// BoxConventionOptions and CalibrationOptions declared once, with its
+// every field of DetectorNoiseOptions, BoxConventionOptions and CalibrationOptions declared once, with its
 // command-line name, help and rule. They drive the structs' Check(),
 // OptionFields (config.json's "calibration", written when it differs from the
 // defaults), `samp fit`'s --calibration-* options, `samp calibrate-detector`'s
@@ -19,8 +18,7 @@ const OptionTable<BoxConventionOptions>& BoxConventionOptionTable();
 // With the noise options (no prefix) and the box options ("box-") nested.
 const OptionTable<CalibrationOptions>& CalibrationOptionTable();
 
-// The JSON of the options through the tables (core/json_fields.h); the noise
-// options' bin edges beside the table's fields.
+// The JSON of the options through the tables (core/json_fields.h).
 void OptionFields(OptionsJson& io, DetectorNoiseOptions& o);
 void OptionFields(OptionsJson& io, BoxConventionOptions& o);
 void OptionFields(OptionsJson& io, CalibrationOptions& o);

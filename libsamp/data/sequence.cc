@@ -58,7 +58,6 @@ void SequenceOptions::Check() const {
   observations.Check();
   tracker.Check();
   SequenceOptionTable().Check(*this);
-  SAMP_CHECK(!object_types.empty()) << "SequenceOptions.object_types must not be empty";
   SAMP_CHECK(max_image_bytes > 0) << "SequenceOptions.max_image_bytes must be > 0, is " << max_image_bytes;
 }
 

@@ -1,5 +1,7 @@
 #include "libsamp/data/sequence_option_table.h"
 
+#include <algorithm>
+
 #include "libsamp/data/observation_option_table.h"
 #include "libsamp/data/tracker_option_table.h"
 
@@ -83,6 +85,15 @@ OptionTable<SequenceOptions> MakeSequenceTable() {
                 "ab3dmot (frame,type,x1,y1,x2,y2,score,h,w,l,x,y,z,ry,alpha; type 2 = car)",
                 std::string("auto"))
       .Choices({"auto", "kitti-object", "kitti-tracking", "ab3dmot"});
+  t.AddList("object_types", &O::object_types, "object types used, comma-separated, case-insensitive")
+      .Flag("types")
+      .Separator(',')
+      .Rule("a non-empty list of names", [](const O& o) {
+        return !o.object_types.empty() &&
+               std::none_of(o.object_types.begin(), o.object_types.end(), [](const std::string& type) {
+                 return type.empty();
+               });
+      });
   return t;
 }
 
@@ -99,7 +110,6 @@ void OptionFields(OptionsJson& io, SequenceOptions& o) {
   io.Nested("observations", o.observations);
   io.Nested("tracker", o.tracker);
   SequenceOptionTable().Json(io, o);
-  io("object_types", o.object_types);
 }
 
 const OptionTable<StereoOptions>& StereoOptionTable() {

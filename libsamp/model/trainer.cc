@@ -21,6 +21,7 @@
 #include "libsamp/core/progress.h"
 #include "libsamp/core/util.h"
 #include "libsamp/model/pca_option_table.h"
+#include "libsamp/model/train_option_table.h"
 #include "libsamp/scan/canonical.h"
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/scan/scan_option_table.h"
@@ -124,66 +125,20 @@ void SaveModelSdf(const std::string& path, const Sdf& sdf, const TrainJob& job,
 }  // namespace
 
 void TrainOptions::Check() const {
-  SAMP_CHECK(!cad_folder.empty()) << "train: cad_folder must be given";
-  SAMP_CHECK(!output_path.empty()) << "train: output_path must be given";
-  SAMP_CHECK(num_threads >= 0) << "train: num_threads must be >= 0 (0 = all cores), got "
-                               << num_threads;
+  TrainOptionTable().Check(*this);
   grid.Check();
   scan.Check();
   sdf.Check();
   gate.Check();
-  for (const Eigen::Vector3d& f : size_variants) {
-    SAMP_CHECK(f.allFinite() && f.minCoeff() >= 0.5 && f.maxCoeff() <= 2.0)
-        << "train: size variant factors (length, height, width) must be in [0.5, 2], got " << f.transpose();
-  }
   pca.Check();
-  if (!preset.empty()) CanonicalPreset(preset);  // throws naming the known presets
 }
 
-std::string TrainOptions::ToJson() const {
-  nlohmann::json j;
-  j["cad_folder"] = cad_folder;
-  j["manifest"] = manifest_path;
-  j["preset"] = preset;
-  j["grid"] = {{"origin", Vector3Json(grid.origin)},
-               {"voxel_size", grid.voxel_size},
-               {"dims", {grid.dims.x(), grid.dims.y(), grid.dims.z()}}};
-  j["scan"] = OptionsToJson(scan);
-  j["sdf"] = OptionsToJson(sdf);
-  j["gate"] = OptionsToJson(gate);
-  j["pca"] = OptionsToJson(pca);
-  nlohmann::json variants = nlohmann::json::array();
-  for (const Eigen::Vector3d& f : size_variants) variants.push_back(Vector3Json(f));
-  j["size_variants"] = variants;
-  return DumpJson(j);
-}
+std::string TrainOptions::ToJson() const { return DumpJson(OptionsToJson(*this)); }
 
 TrainOptions TrainOptionsFromJson(const std::string& json, const std::string& source) {
   const nlohmann::json parsed = ParseJson(json, source);
-  const JsonFields j(parsed, source);
   TrainOptions o;
-  j.Read("cad_folder", &o.cad_folder);
-  j.Read("manifest", &o.manifest_path);
-  j.Read("preset", &o.preset);
-  const JsonFields grid = j.Object("grid");
-  const std::vector<double> origin = grid.Get<std::vector<double>>("origin");
-  const std::vector<int> dims = grid.Get<std::vector<int>>("dims");
-  SAMP_CHECK(origin.size() == 3 && dims.size() == 3)
-      << grid.Where() << ": 'origin' and 'dims' must have 3 entries each";
-  o.grid.origin = Eigen::Vector3d(origin[0], origin[1], origin[2]);
-  o.grid.dims = Eigen::Vector3i(dims[0], dims[1], dims[2]);
-  grid.Read("voxel_size", &o.grid.voxel_size);
-  OptionsFromJson(j.Object("scan"), &o.scan);
-  OptionsFromJson(j.Object("sdf"), &o.sdf);
-  OptionsFromJson(j.Object("gate"), &o.gate);
-  OptionsFromJson(j.Object("pca"), &o.pca);
-  // Model files written before size variants existed have no key: none were used.
-  if (j.Has("size_variants")) {
-    for (const std::vector<double>& f : j.Get<std::vector<std::vector<double>>>("size_variants")) {
-      SAMP_CHECK(f.size() == 3) << j.Where() << ": each entry of 'size_variants' must have 3 factors";
-      o.size_variants.emplace_back(f[0], f[1], f[2]);
-    }
-  }
+  OptionsFromJson(JsonFields(parsed, source), &o);
   return o;
 }
 

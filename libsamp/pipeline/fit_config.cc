@@ -2,22 +2,16 @@
 #include "libsamp/pipeline/fit_config.h"
 
 #include "libsamp/core/atomic_file.h"
+#include "libsamp/pipeline/run_fit_option_table.h"
 
 namespace samp {
 
 void OptionFields(OptionsJson& io, RunFitOptions& o) {
-  io("model", o.model_path);
-  io("sequences", o.sequences);
-  io("tracking_labels", o.tracking_labels);
-  io("output_dir", o.output_dir);
+  // The run's own fields (model, sequences, output_dir, ...; the table's
+  // order), then the nested structs.
+  RunFitOptionTable().Json(io, o);
   io.Nested("fit", o.fit);
   io.Nested("sequence", o.sequence);
-  io("num_threads", o.num_threads);
-  io("write_meshes", o.write_meshes);
-  io("link_only", o.link_only);
-  // Detector calibration (issue 28; run_fit.h), written only when used.
-  io.Optional("self_calibrate", o.self_calibrate, false);
-  io.Optional("detector_model", o.detector_model_path, std::string());
   // The self-calibration's options (data/calibration_option_table.h), written when not the defaults.
   io.OptionalNested("calibration", o.calibration);
 }

@@ -19,6 +19,7 @@ namespace samp {
 // StereoOptions, RoadPlaneOptions, SequenceOptions: data/sequence_option_table.h; ObservationOptions:
 // data/observation_option_table.h; TrackerOptions: data/tracking.h.
 // MotionNoise, FitOptions: fit/fit_option_table.h (their option tables).
+// RunFitOptions' own fields: pipeline/run_fit_option_table.h.
 void OptionFields(OptionsJson& io, RunFitOptions& o);
 
 struct FitConfig {

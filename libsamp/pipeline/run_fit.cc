@@ -19,6 +19,7 @@
 #include "libsamp/core/pose.h"
 #include "libsamp/pipeline/fit_config.h"
 #include "libsamp/pipeline/fit_output.h"
+#include "libsamp/pipeline/run_fit_option_table.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/sequence.h"
 #include "libsamp/model/shape_model.h"
@@ -28,14 +29,7 @@ namespace samp {
 namespace fs = std::filesystem;
 
 void RunFitOptions::Check() const {
-  SAMP_CHECK(link_only || !model_path.empty()) << "RunFitOptions.model_path is empty";
-  SAMP_CHECK(!sequences.empty()) << "RunFitOptions.sequences is empty (give at least one --seq)";
-  SAMP_CHECK(tracking_labels.empty() || tracking_labels.size() == sequences.size())
-      << "RunFitOptions.tracking_labels: " << tracking_labels.size() << " files for "
-      << sequences.size() << " sequences (give none or one per sequence)";
-  SAMP_CHECK(!output_dir.empty()) << "RunFitOptions.output_dir is empty";
-  SAMP_CHECK(num_threads >= 0) << "RunFitOptions.num_threads must be >= 0 (0 = all cores), is "
-                               << num_threads;
+  RunFitOptionTable().Check(*this);
   fit.Check();
   sequence.Check();
   calibration.Check();

@@ -15,6 +15,7 @@
 #include "libsamp/scan/renderer.h"
 #include "libsamp/viz/inspect.h"
 #include "libsamp/viz/plot.h"
+#include "libsamp/viz/view_option_table.h"
 
 namespace samp {
 namespace {
@@ -730,11 +731,8 @@ FitPictureSummary WriteErrorSurfacePictures(const FitRunView& run, const FitPict
 }
 
 void FitVisualsOptions::Check() const {
-  SAMP_CHECK(!output_dir.empty()) << "FitVisualsOptions.output_dir is empty";
-  SAMP_CHECK(pictures || html) << "FitVisualsOptions: neither pictures nor html asked for";
-  load.Check();
+  FitVisualsOptionTable().Check(*this);  // with load and page
   picture.Check();
-  page.Check();
 }
 
 std::string FitVisualsSummary::BriefReport() const {

@@ -17,6 +17,7 @@
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/viz/image.h"
 #include "libsamp/viz/inspect.h"
+#include "libsamp/viz/view_option_table.h"
 
 namespace samp {
 namespace {
@@ -113,8 +114,7 @@ int FitRunView::NumTracks() const {
 }
 
 void LoadFitRunOptions::Check() const {
-  SAMP_CHECK(error_tau > 0) << "LoadFitRunOptions.error_tau must be > 0";
-  SAMP_CHECK(error_samples > 0) << "LoadFitRunOptions.error_samples must be > 0";
+  LoadFitRunOptionTable().Check(*this);
 }
 
 int FrameIndexOfColor(uint8_t red, uint8_t green, uint8_t blue, int num_frames) {

@@ -12,6 +12,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/viz/html_assets.h"
 #include "libsamp/viz/image.h"
+#include "libsamp/viz/view_option_table.h"
 
 namespace samp {
 namespace {
@@ -195,7 +196,7 @@ bool HtmlViewerAvailable() { return !internal::EmbeddedAsset("three.min.js").emp
 std::string EmbeddedThreeRevision() { return internal::EmbeddedThreeRevisionString(); }
 
 void FitHtmlOptions::Check() const {
-  SAMP_CHECK(max_points_per_frame >= 0) << "FitHtmlOptions.max_points_per_frame must be >= 0";
+  FitHtmlOptionTable().Check(*this);
 }
 
 void InspectHtmlOptions::Check() const {

@@ -25,6 +25,7 @@
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/scan/renderer.h"
 #include "libsamp/sdf/vdb_io.h"
+#include "libsamp/viz/inspect_option_table.h"
 #include "libsamp/viz/opencv_image.h"
 #include "libsamp/viz/plot.h"
 #include "libsamp/sdf/surface.h"
@@ -42,11 +43,6 @@ std::string Format(const char* format, double value) {
 }
 
 bool IsVdbFile(const std::string& path) { return Lower(fs::path(path).extension().string()) == ".vdb"; }
-
-void CheckMeshFormat(const std::string& format, const char* field) {
-  SAMP_CHECK(format == "ply" || format == "obj" || format == "glb")
-      << field << " must be ply, obj or glb, got '" << format << "'";
-}
 
 double Sigma(const ShapeModel& model, int i) { return std::sqrt(std::max(0.0, model.eigenvalues[i])); }
 
@@ -205,11 +201,7 @@ std::string SummarizeModel(const ShapeModel& model, const std::string& path) {
 // ---- Eigen-shape meshes -----------------------------------------------------------
 
 void EigenShapeMeshOptions::Check() const {
-  SAMP_CHECK(!output_folder.empty()) << "inspect: the mesh output folder must be given";
-  SAMP_CHECK(!ks.empty()) << "inspect: --k needs at least one value";
-  for (double k : ks) SAMP_CHECK(std::isfinite(k)) << "inspect: --k values must be finite";
-  CheckMeshFormat(format, "inspect: --format");
-  SAMP_CHECK(max_components >= 0) << "inspect: max_components must be >= 0";
+  EigenShapeMeshOptionTable().Check(*this);
 }
 
 std::string EigenShapeMeshSummary::BriefReport() const {
@@ -260,13 +252,7 @@ EigenShapeMeshSummary WriteEigenShapeMeshes(const ShapeModel& model,
 // ---- Encoding ---------------------------------------------------------------------
 
 void EncodeOptions::Check() const {
-  SAMP_CHECK(!input.empty()) << "inspect: --encode needs a file or folder";
-  SAMP_CHECK(std::isfinite(prior_weight) && prior_weight >= 0)
-      << "inspect: prior_weight must be >= 0, got " << prior_weight;
-  SAMP_CHECK(near_surface_voxels > 0) << "inspect: near_surface_voxels must be > 0";
-  CheckMeshFormat(mesh_format, "inspect: mesh format");
-  SAMP_CHECK(num_distance_samples >= 100)
-      << "inspect: num_distance_samples must be >= 100, got " << num_distance_samples;
+  EncodeOptionTable().Check(*this);
 }
 
 ShapeInput LoadShapeInput(const std::string& path, const ShapeModel& model,

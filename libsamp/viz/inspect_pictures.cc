@@ -17,6 +17,7 @@
 #include "libsamp/scan/mesh_io.h"
 #include "libsamp/scan/renderer.h"
 #include "libsamp/viz/inspect.h"
+#include "libsamp/viz/inspect_option_table.h"
 #include "libsamp/viz/opencv_image.h"
 #include "libsamp/viz/plot.h"
 #include "libsamp/sdf/surface.h"
@@ -236,14 +237,7 @@ RgbImage RenderSdfSlice(const GridSpec& grid, const std::vector<float>& sdf, int
 // ---- Eigen-shape grid ---------------------------------------------------------------
 
 void PictureOptions::Check() const {
-  SAMP_CHECK(!output_folder.empty()) << "inspect: the picture folder must be given";
-  SAMP_CHECK(num_sheet_shapes >= 1 && num_sheet_shapes <= 50)
-      << "inspect: num_sheet_shapes must be in [1, 50], got " << num_sheet_shapes;
-  SAMP_CHECK(!sigmas.empty()) << "inspect: the eigen-shape grid needs at least one column";
-  for (double s : sigmas) SAMP_CHECK(std::isfinite(s)) << "inspect: sigmas must be finite";
-  SAMP_CHECK(max_components >= 0) << "inspect: max_components must be >= 0";
-  SAMP_CHECK(cell_width >= 120 && cell_height >= 90)
-      << "inspect: picture cells must be at least 120 x 90 pixels";
+  PictureOptionTable().Check(*this);
 }
 
 RgbImage RenderEigenShapeGrid(const ShapeModel& model, const PictureOptions& options) {

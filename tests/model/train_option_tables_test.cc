@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "libsamp/model/pca_option_table.h"
+#include "libsamp/model/train_option_table.h"
 #include "libsamp/model/trainer.h"
 #include "libsamp/scan/scan_option_table.h"
 #include "libsamp/sdf/sdf_option_table.h"
@@ -82,6 +83,49 @@ TEST(TrainOptionTables, JsonKeepsTheModelFilesKeys) {
   EXPECT_EQ(TrainOptionsFromJson(o.ToJson(), "test").ToJson(), o.ToJson());
 }
 
+// TrainOptions' own fields: the rules, the wiring, and the keys the model
+// files store (output paths and threads are not stored).
+TEST(TrainOptionTables, TrainOptionsRulesAndJson) {
+  TrainOptions o;
+  test::ExpectError([&] { o.Check(); }, {"TrainOptions.cad_folder must be given, got "});
+  o.cad_folder = "cars";
+  test::ExpectError([&] { o.Check(); }, {"TrainOptions.output_path must be given, got "});
+  o.output_path = "m.vdb";
+  EXPECT_NO_THROW(o.Check());
+  o.preset = "kitti";
+  test::ExpectError([&] { o.Check(); },
+                    {"TrainOptions.preset must be empty or one of shapenet, apollocar3d, got kitti"});
+  o.preset = "shapenet";
+  o.size_variants = {Eigen::Vector3d(1.0, 1.1, 2.5)};
+  test::ExpectError([&] { o.Check(); }, {"TrainOptions.size_variants must be in [0.5, 2], got 1,1.1,2.5"});
+  o.size_variants.clear();
+  o.num_threads = -2;
+  test::ExpectError([&] { o.Check(); }, {"TrainOptions.num_threads must be >= 0, got -2"});
+
+  test::ExpectEveryFieldWired(TrainOptionTable(), "", {"grid.", "scan.", "sdf.", "gate.", "pca."});
+  test::ExpectJsonRoundTrip(TrainOptionTable());
+  EXPECT_EQ(JsonKeys(OptionsToJson(TrainOptions())),
+            (std::vector<std::string>{"cad_folder", "gate", "grid", "manifest", "pca", "preset", "scan", "sdf",
+                                      "size_variants"}));
+  // The computed fields set what they stand for.
+  TrainOptions c;
+  for (const OptionBinding& b : TrainOptionTable().Bind(&c)) {
+    if (b.info.name == "voxel_size") b.set("0.05");
+    if (b.info.name == "resolution") b.set("128");
+    if (b.info.name == "size_variants") b.set_list({"1", "1.1", "1.2", "0.9", "1", "1"});
+  }
+  EXPECT_EQ(c.grid.dims, GridSpec::CarDefault(0.05).dims);
+  EXPECT_EQ(c.scan.width, 128);
+  EXPECT_EQ(c.scan.height, 128);
+  ASSERT_EQ(c.size_variants.size(), 2u);
+  EXPECT_EQ(c.size_variants[1], Eigen::Vector3d(0.9, 1, 1));
+  // A model file written before size variants existed has none.
+  nlohmann::json old = OptionsToJson(c);
+  old.erase("size_variants");
+  EXPECT_TRUE(TrainOptionsFromJson(DumpJson(old), "old.vdb").size_variants.empty());
+  EXPECT_EQ(TrainOptionsFromJson(c.ToJson(), "new.vdb").ToJson(), c.ToJson());
+}
+
 TEST(TrainOptionTables, DocsListTheTables) {
   std::vector<OptionInfo> infos;
   for (const std::vector<OptionInfo>& part :
@@ -95,6 +139,10 @@ TEST(TrainOptionTables, DocsListTheTables) {
             OptionsMarkdown(SdfQualityOptionTable().Describe(), "gate-"))
       << "docs/training.md's gate option list differs from the table: regenerate it with "
          "`samp train --help-options gate-markdown`";
+  EXPECT_EQ(test::DocSection(SAMP_TRAINING_DOC, "samp train --help-options run-markdown"),
+            OptionsMarkdown(TrainOptionTable().Describe()))
+      << "docs/training.md's run option list differs from the table: regenerate it with "
+         "`samp train --help-options run-markdown`";
 }
 
 }  // namespace

@@ -26,7 +26,8 @@ TEST(CalibrationOptionTable, CheckNamesTheFieldTheRuleAndTheValue) {
   test::ExpectError([&] { o.Check(); }, {"CalibrationOptions.tracker_sigma_scale must be >= 1, got 0.5"});
   o = CalibrationOptions();
   o.noise.bin_edges = {0, 20, 10};
-  test::ExpectError([&] { o.Check(); }, {"DetectorNoiseOptions.bin_edges must increase"});
+  test::ExpectError([&] { o.Check(); },
+                    {"CalibrationOptions.noise.bin_edges must be a non-empty increasing list, got 0,20,10"});
   DetectorNoiseOptions noise;
   noise.trim_sigmas = 1;
   test::ExpectError([&] { noise.Check(); }, {"DetectorNoiseOptions.trim_sigmas must be >= 1.5, got 1"});

@@ -128,7 +128,7 @@ def test_check_is_the_structs_check():
     with pytest.raises(samp.Error, match=r"^FitOptions.em_iterations must be >= 0, got -1"):
         o.check()
     r = samp.RunFitOptions()
-    with pytest.raises(samp.Error, match="model_path is empty"):
+    with pytest.raises(samp.Error, match=r"^RunFitOptions.model must be given unless link_only"):
         r.check()
     t = samp.TrainOptions(cad_folder="cad", output="model.vdb")
     t.check()

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -16,8 +17,23 @@
 
 namespace samp::test {
 
+// A list other than the default, as ","-separated text (OptionBinding::set).
+inline std::string OtherList(const OptionInfo& info) {
+  if (info.kind == OptionKind::kText) return info.default_text.empty() ? "other" : info.default_text + ",other";
+  for (double value : {1.0, 0.75, 2.0, 10.0}) {
+    const std::string text = FormatOptionNumber(value);
+    if (!info.Validate(text).empty()) continue;
+    std::string list;
+    for (int k = 0; k < info.arity; ++k) list += (k ? "," : "") + text;
+    if (list != info.default_text) return list;
+  }
+  ADD_FAILURE() << info.name << ": no other value";
+  return info.default_text;
+}
+
 // A value other than the default, as command-line text.
 inline std::string OtherValue(const OptionInfo& info) {
+  if (info.list) return OtherList(info);
   switch (info.kind) {
     case OptionKind::kFlag:
       return info.default_text == "true" ? "false" : "true";
@@ -62,19 +78,34 @@ inline void JsonLeaves(const nlohmann::json& j, const std::string& prefix, std::
   }
 }
 
-// The JSON (OptionsToJson) holds exactly the table's fields, each once, with
+// The JSON leaves of the options `o` but those under `nested` ("fit." for a
+// struct whose JSON nests others besides its table's fields).
+template <typename S>
+std::map<std::string, std::string> TableLeaves(const S& o, const std::vector<std::string>& nested) {
+  std::map<std::string, std::string> leaves;
+  JsonLeaves(OptionsToJson(o), "", &leaves);
+  for (auto it = leaves.begin(); it != leaves.end();) {
+    bool skip = false;
+    for (const std::string& n : nested) skip = skip || it->first.rfind(n, 0) == 0;
+    it = skip ? leaves.erase(it) : std::next(it);
+  }
+  return leaves;
+}
+
+// The JSON (OptionsToJson) holds exactly the table's fields (but those marked
+// NotInJson, and the structs nested under `nested`), each once, with
 // distinct command-line names; setting one field through its binding (a
 // valid other value) changes that JSON key and no other.
 template <typename S>
-void ExpectEveryFieldWired(const OptionTable<S>& table, const std::string& prefix) {
+void ExpectEveryFieldWired(const OptionTable<S>& table, const std::string& prefix,
+                           const std::vector<std::string>& nested = {}) {
   const std::vector<OptionInfo> infos = table.Describe();
-  std::map<std::string, std::string> defaults;
-  JsonLeaves(OptionsToJson(S()), "", &defaults);
+  std::map<std::string, std::string> defaults = TableLeaves(S(), nested);
   std::set<std::string> optional;
   // Fields written only when they differ from their default (AddOptional)
   // are absent from the defaults' JSON: they count once set below.
   for (const OptionInfo& i : infos) {
-    if (defaults.count(i.name)) continue;
+    if (defaults.count(i.name) || !i.in_json) continue;
     S changed;
     for (const OptionBinding& b : table.Bind(&changed)) {
       if (b.info.name != i.name) continue;
@@ -84,36 +115,38 @@ void ExpectEveryFieldWired(const OptionTable<S>& table, const std::string& prefi
         b.set(OtherValue(i));
       }
     }
-    std::map<std::string, std::string> leaves;
-    JsonLeaves(OptionsToJson(changed), "", &leaves);
-    if (leaves.count(i.name)) {
+    if (TableLeaves(changed, nested).count(i.name)) {
       defaults[i.name] = "(written when set)";
       optional.insert(i.name);
     }
   }
   std::set<std::string> names, flags;
+  size_t in_json = 0;
   for (const OptionInfo& i : infos) {
     EXPECT_TRUE(names.insert(i.name).second) << i.name;
-    EXPECT_TRUE(defaults.count(i.name)) << i.name << " not in the JSON";
+    in_json += i.in_json ? 1 : 0;
+    EXPECT_EQ(defaults.count(i.name), i.in_json ? 1u : 0u) << i.name << (i.in_json ? " not" : "") << " in the JSON";
     EXPECT_FALSE(i.help.empty()) << i.name;
     if (i.internal) continue;
-    EXPECT_TRUE(flags.insert(CommandLineName(i.flag, prefix)).second) << i.flag;
-    if (i.kind == OptionKind::kFlag) {
+    EXPECT_TRUE(flags.insert(CommandLineName(i, prefix)).second) << i.flag;
+    if (i.kind == OptionKind::kFlag && i.flag_names != FlagNames::kOnOnly) {
       EXPECT_TRUE(flags.insert(OffFlagName(i, prefix)).second) << i.name;
     }
     for (const auto& d : i.deprecated) EXPECT_TRUE(flags.insert(CommandLineName(d.first, prefix)).second) << d.first;
   }
-  EXPECT_EQ(names.size(), defaults.size());
+  EXPECT_EQ(in_json, defaults.size());
   for (const OptionInfo& info : infos) {
+    if (!info.in_json) continue;
     S options;
     for (const OptionBinding& b : table.Bind(&options)) {
       if (b.info.name != info.name) continue;
       const std::string value = OtherValue(info);
-      EXPECT_EQ(b.info.Validate(value), "") << info.name << " = " << value;
+      for (const std::string& part : info.list ? SplitOptionList(value) : std::vector<std::string>{value}) {
+        EXPECT_EQ(b.info.Validate(part), "") << info.name << " = " << value;
+      }
       b.set(value);
     }
-    std::map<std::string, std::string> changed;
-    JsonLeaves(OptionsToJson(options), "", &changed);
+    std::map<std::string, std::string> changed = TableLeaves(options, nested);
     for (const auto& [key, text] : defaults) {
       // An optional field at its default is absent, which is its default.
       const std::string now = changed.count(key) || !optional.count(key) ? changed[key] : text;

@@ -35,12 +35,8 @@ void RegisterCalibrateCommand(CLI::App* app) {
       ->check(CLI::PositiveNumber);
   command->add_option("-o,--out", args->out, "Detector model JSON to write")->required();
   const std::string noise_group = "Estimation (DetectorNoiseOptions; docs/detector_calibration.md, \"Options\")";
+  // Every field, --bin-edges too, from the table (data/calibration_option_table.h).
   AddTableOptions(command, DetectorNoiseOptionTable().Bind(&args->options.noise), "", noise_group);
-  command->add_option("--bin-edges", args->options.noise.bin_edges,
-                      "Distance bin edges, m, increasing, comma-separated (the last bin is open)")
-      ->delimiter(',')
-      ->capture_default_str()
-      ->group(noise_group);
   AddCommonOptions(command);
   command->callback([args] {
     DetectorCalibrationSummary summary;

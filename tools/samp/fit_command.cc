@@ -3,12 +3,12 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <sstream>
 #include <string>
 
 #include "libsamp/core/error.h"
 #include "libsamp/core/log.h"
 #include "libsamp/pipeline/run_fit.h"
+#include "libsamp/pipeline/run_fit_option_table.h"
 #include "libsamp/data/calibration_option_table.h"
 #include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/observation_option_table.h"
@@ -27,37 +27,19 @@
 namespace samp::tools {
 namespace {
 
-// Where the inputs are, besides --seq: KITTI tracking sequences, frames, detections.
+// Where the inputs are, besides --seq: KITTI tracking sequences and frames.
+// Command-line plumbing only, hence registered here and not on a table: the
+// callback turns them into RunFitOptions' sequences and SequenceOptions'
+// frame range, which config.json holds.
 struct InputSource {
   std::string kitti_root;
   std::string kitti_stereo_root;
   std::string kitti_sequences = "all";
   std::string frames;
-  std::string object_types;
 };
 
-}  // namespace
-
-void RegisterFitCommand(CLI::App* app) {
-  auto options = std::make_shared<RunFitOptions>();
-  auto visuals = std::make_shared<FitVisualsOptions>();
-  auto source = std::make_shared<InputSource>();
-  visuals->pictures = visuals->html = false;
-  RunFitOptions& o = *options;
-  o.model_path = SAMP_DEFAULT_MODEL;
-  CLI::App* command = app->add_subcommand(
-      "fit",
-      "Fit shape (PCA SDF manifold) and trajectory of every tracked car in stereo sequences,\n"
-      "with shape and motion priors (SAMP). Writes OUT/label_02/<seq>.txt (KITTI tracking\n"
-      "results), OUT/meshes/track_<id>.ply (+ _points.ply), OUT/tracks.json and OUT/config.json.\n"
-      "A sequence or track that fails is reported and skipped; OUT holds this run only.\n"
-      "See docs/fitting.md.");
-  command->add_option("--model", o.model_path, "Shape model file (.vdb); default: the shipped model")
-      ->capture_default_str();
-  command->add_option("--seq", o.sequences,
-                      "Sequence directory (docs/sequence_format.md; samp's layout, a KITTI tracking "
-                      "ROOT/image_02/<seq> or a KITTI stereo ROOT/calib_cam_to_cam/<seq>.txt); repeat for a batch");
-  const std::string input_group = "Input (docs/sequence_format.md)";
+// --kitti-tracking, --kitti-stereo, --sequence and --frames.
+void AddInputSourceOptions(CLI::App* command, InputSource* source, const std::string& input_group) {
   command->add_option("--kitti-tracking", source->kitti_root,
                       "KITTI tracking folder in its own layout (training/ or testing/: image_02, image_03, calib, "
                       "oxts); ego poses from oxts/")
@@ -75,20 +57,85 @@ void RegisterFitCommand(CLI::App* app) {
       ->group(input_group);
   command->add_option("--frames", source->frames, "Fit only frames FIRST-LAST (e.g. 100-300) of each sequence")
       ->group(input_group);
-  // SequenceOptions' own options (--detections, --detection-format, --min-score): its table
+}
+
+// The callback of `samp fit`: the input source into the options, the run, the pictures and viewer.
+void RunFitCommand(const std::shared_ptr<RunFitOptions>& options, const std::shared_ptr<FitVisualsOptions>& visuals,
+                   const InputSource& source, const CLI::App& command) {
+  SAMP_CHECK(command.count("--sequence") == 0 || !source.kitti_root.empty() || !source.kitti_stereo_root.empty())
+      << "--sequence names sequences of --kitti-tracking or --kitti-stereo; give one of them (or --seq)";
+  if (!source.kitti_root.empty()) {
+    for (const std::string& folder : KittiTrackingSequenceFolders(source.kitti_root, source.kitti_sequences))
+      options->sequences.push_back(folder);
+  }
+  if (!source.kitti_stereo_root.empty()) {
+    for (const std::string& file : KittiStereoSequences(source.kitti_stereo_root, source.kitti_sequences))
+      options->sequences.push_back(file);
+  }
+  if (options->sequences.empty()) throw CLI::RequiredError("--seq, --kitti-tracking or --kitti-stereo");
+  if (!source.frames.empty()) ParseFrameRange(source.frames, &options->sequence);
+  std::error_code error;
+  SAMP_CHECK(options->sequence.detections_path.empty() || options->sequences.size() == 1 ||
+             std::filesystem::is_directory(options->sequence.detections_path, error))
+      << "--detections " << options->sequence.detections_path << " is a file, but " << options->sequences.size()
+      << " sequences are fitted: give a folder with <seq>.txt per sequence";
+  SAMP_CHECK(options->link_only || !options->model_path.empty())
+      << "no --model given and this build has no default model";
+  SAMP_CHECK(!(options->link_only && (visuals->pictures || visuals->html)))
+      << "--link-only fits nothing: --pictures and --html need fitted shapes";
+  // Pictures and viewer go into the run's temporary output folder, so that
+  // they replace the earlier run's together with everything else.
+  std::string visuals_report;
+  if (visuals->pictures || visuals->html) {
+    options->before_commit = [visuals, &visuals_report](const std::string& folder) {
+      FitVisualsOptions v = *visuals;
+      v.output_dir = folder;
+      visuals_report = WriteFitVisuals(v).BriefReport();
+      // Name the files where they will be after the rename.
+      for (size_t at = visuals_report.find(folder); at != std::string::npos;
+           at = visuals_report.find(folder, at + visuals->output_dir.size())) {
+        visuals_report.replace(at, folder.size(), visuals->output_dir);
+      }
+    };
+    visuals->output_dir = options->output_dir;
+  }
+  const RunFitSummary summary = RunFit(*options);
+  std::cout << summary.BriefReport() << std::endl;
+  if (summary.kept_previous_output) {
+    SAMP_THROW() << summary.failure << "; " << options->output_dir << " keeps the earlier run's output";
+  }
+  std::cout << "wrote " << options->output_dir << std::endl;
+  if (!summary.failure.empty()) SAMP_THROW() << summary.failure;
+  if (!visuals_report.empty()) std::cout << visuals_report << std::endl;
+}
+
+}  // namespace
+
+void RegisterFitCommand(CLI::App* app) {
+  auto options = std::make_shared<RunFitOptions>();
+  auto visuals = std::make_shared<FitVisualsOptions>();
+  auto source = std::make_shared<InputSource>();
+  visuals->pictures = visuals->html = false;
+  RunFitOptions& o = *options;
+  o.model_path = SAMP_DEFAULT_MODEL;
+  CLI::App* command = app->add_subcommand(
+      "fit",
+      "Fit shape (PCA SDF manifold) and trajectory of every tracked car in stereo sequences,\n"
+      "with shape and motion priors (SAMP). Writes OUT/label_02/<seq>.txt (KITTI tracking\n"
+      "results), OUT/meshes/track_<id>.ply (+ _points.ply), OUT/tracks.json and OUT/config.json.\n"
+      "A sequence or track that fails is reported and skipped; OUT holds this run only.\n"
+      "See docs/fitting.md.");
+  // RunFitOptions' own fields from its table (pipeline/run_fit_option_table.h),
+  // each at its place among the other options.
+  const std::vector<OptionBinding> run = RunFitOptionTable().Bind(&o);
+  const std::string run_group = "Options";
+  AddTableOptions(command, Only(run, {"model", "sequences"}), "", run_group);
+  const std::string input_group = "Input (docs/sequence_format.md)";
+  AddInputSourceOptions(command, source.get(), input_group);
+  // SequenceOptions' own options (--detections, --detection-format, --min-score, --types): its table
   // (data/sequence_option_table.h).
   AddTableOptions(command, SequenceOptionTable().Bind(&o.sequence), "", input_group);
-  command->add_option("--types", source->object_types,
-                      "Object types used, comma-separated, case-insensitive (default Car)")
-      ->group(input_group);
-  command->add_option("--out", o.output_dir,
-                      "Output directory: written into a temporary folder beside it that replaces it as a "
-                      "whole at the end; must be new, empty or an earlier samp fit output")
-      ->required();
-  command->add_option("--tracks", o.tracking_labels,
-                      "KITTI tracking label file giving the tracks (frame track_id ...); repeat once "
-                      "per --seq, in the same order: the way to plug in another tracker. Without it "
-                      "detections/ are linked into tracks by samp's tracker (--tracker-* options)");
+  AddTableOptions(command, Only(run, {"output_dir", "tracking_labels"}), "", run_group);
   // FitOptions (with its MotionNoise) and TrackerOptions: every field from
   // their tables (fit/fit_option_table.h, data/tracker_option_table.h).
   const std::string fit_group = "Fit (FitOptions; docs/fitting.md, \"Options\")";
@@ -108,97 +155,27 @@ void RegisterFitCommand(CLI::App* app) {
                            {"stereo-markdown", StereoOptionTable().Describe(), "stereo-"},
                            {"road-markdown", RoadPlaneOptionTable().Describe(), "road-"},
                            {"calibration-markdown", CalibrationOptionTable().Describe(), "calibration-"},
-                           {"input-markdown", SequenceOptionTable().Describe(), ""}});
+                           {"input-markdown", SequenceOptionTable().Describe(), ""},
+                           {"run-markdown", RunFitOptionTable().Describe(), ""}});
   const std::string observation_group = "Candidate points (ObservationOptions; docs/fitting.md, \"Association\")";
   AddTableOptions(command, ObservationOptionTable().Bind(&o.sequence.observations), "", observation_group);
   AddTableOptions(command, StereoOptionTable().Bind(&o.sequence.stereo), "stereo-",
                   "Disparity of frames without disparity/ (StereoOptions; docs/sequence_format.md, \"Stereo\")");
   AddTableOptions(command, RoadPlaneOptionTable().Bind(&o.sequence.road_plane), "road-",
                   "Road plane of frames without planes/ (RoadPlaneOptions; docs/sequence_format.md, \"Road plane\")");
-  command->add_flag("--self-calibrate,!--no-self-calibrate", o.self_calibrate,
-                    "Estimate the detector's noise model from the sequences (robust linking, residuals of the "
-                    "smoothed tracks, to a fixed point) and link and fit with it; writes OUT/detector_model.json "
-                    "(docs/detector_calibration.md)")
-      ->capture_default_str();
+  AddTableOptions(command, Only(run, {"self_calibrate"}), "", run_group);
   const std::string calibration_group =
       "Self-calibration (CalibrationOptions; docs/detector_calibration.md, \"Options\")";
   AddTableOptions(command, CalibrationOptionTable().Bind(&o.calibration), "calibration-", calibration_group);
-  command->add_option("--calibration-bin-edges", o.calibration.noise.bin_edges,
-                      "Distance bin edges of the noise estimate, m, increasing, comma-separated (the last bin is open)")
-      ->delimiter(',')
-      ->capture_default_str()
-      ->group(calibration_group);
-  command->add_option("--detector-model", o.detector_model_path,
-                      "A detector model JSON (samp calibrate-detector) giving the tracker's and the fit's "
-                      "detector sigmas (instead of --tracker-*-sigma and --self-calibrate)")
-      ->check(CLI::ExistingFile);
-  command->add_flag("--link-only", o.link_only,
-                    "Only link detections/ into tracks and write the tracked detections as "
-                    "label_02/<seq>.txt (no model, no fit; for samp eval's tracking figures or --tracks)");
-  command->add_flag_callback("--no-meshes", [options] { options->write_meshes = false; },
-                    "Do not write meshes/ (PLY surfaces and aligned points)");
+  AddTableOptions(command, Only(run, {"detector_model", "link_only", "write_meshes"}), "", run_group);
   command->add_flag("--pictures", visuals->pictures,
                     "After the fit, draw PNG pictures per track and sequence into OUT/pictures/ "
                     "(mesh in the image, bird's-eye before/after, shape strip; docs/fitting.md)");
   command->add_flag("--html", visuals->html,
                     "After the fit, write the interactive viewer OUT/index.html (same as `samp view OUT`)");
-  command->add_option("--threads", o.num_threads, "Worker threads for sequences and tracks (0 = all cores)")
-      ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+  AddTableOptions(command, Only(run, {"num_threads"}), "", run_group);
   AddCommonOptions(command);
-  command->callback([options, visuals, source, command] {
-    SAMP_CHECK(command->count("--sequence") == 0 || !source->kitti_root.empty() || !source->kitti_stereo_root.empty())
-        << "--sequence names sequences of --kitti-tracking or --kitti-stereo; give one of them (or --seq)";
-    if (!source->kitti_root.empty()) {
-      for (const std::string& folder : KittiTrackingSequenceFolders(source->kitti_root, source->kitti_sequences))
-        options->sequences.push_back(folder);
-    }
-    if (!source->kitti_stereo_root.empty()) {
-      for (const std::string& file : KittiStereoSequences(source->kitti_stereo_root, source->kitti_sequences))
-        options->sequences.push_back(file);
-    }
-    if (options->sequences.empty()) throw CLI::RequiredError("--seq, --kitti-tracking or --kitti-stereo");
-    if (!source->frames.empty()) ParseFrameRange(source->frames, &options->sequence);
-    if (!source->object_types.empty()) {
-      options->sequence.object_types.clear();
-      std::stringstream list(source->object_types);
-      for (std::string type; std::getline(list, type, ',');)
-        if (!type.empty()) options->sequence.object_types.push_back(type);
-    }
-    std::error_code error;
-    SAMP_CHECK(options->sequence.detections_path.empty() || options->sequences.size() == 1 ||
-               std::filesystem::is_directory(options->sequence.detections_path, error))
-        << "--detections " << options->sequence.detections_path << " is a file, but " << options->sequences.size()
-        << " sequences are fitted: give a folder with <seq>.txt per sequence";
-    SAMP_CHECK(options->link_only || !options->model_path.empty())
-        << "no --model given and this build has no default model";
-    SAMP_CHECK(!(options->link_only && (visuals->pictures || visuals->html)))
-        << "--link-only fits nothing: --pictures and --html need fitted shapes";
-    // Pictures and viewer go into the run's temporary output folder, so that
-    // they replace the earlier run's together with everything else.
-    std::string visuals_report;
-    if (visuals->pictures || visuals->html) {
-      options->before_commit = [visuals, &visuals_report](const std::string& folder) {
-        FitVisualsOptions v = *visuals;
-        v.output_dir = folder;
-        visuals_report = WriteFitVisuals(v).BriefReport();
-        // Name the files where they will be after the rename.
-        for (size_t at = visuals_report.find(folder); at != std::string::npos;
-             at = visuals_report.find(folder, at + visuals->output_dir.size())) {
-          visuals_report.replace(at, folder.size(), visuals->output_dir);
-        }
-      };
-      visuals->output_dir = options->output_dir;
-    }
-    const RunFitSummary summary = RunFit(*options);
-    std::cout << summary.BriefReport() << std::endl;
-    if (summary.kept_previous_output) {
-      SAMP_THROW() << summary.failure << "; " << options->output_dir << " keeps the earlier run's output";
-    }
-    std::cout << "wrote " << options->output_dir << std::endl;
-    if (!summary.failure.empty()) SAMP_THROW() << summary.failure;
-    if (!visuals_report.empty()) std::cout << visuals_report << std::endl;
-  });
+  command->callback([options, visuals, source, command] { RunFitCommand(options, visuals, *source, *command); });
 }
 
 }  // namespace samp::tools

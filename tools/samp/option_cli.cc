@@ -61,6 +61,60 @@ void AddDeprecated(CLI::App* command, const OptionBinding& b, const std::string&
   }
 }
 
+
+CLI::Option* AddFlag(CLI::App* command, const OptionBinding& b, const std::string& name, const std::string& prefix) {
+  const OptionInfo& info = b.info;
+  switch (info.flag_names) {
+    case FlagNames::kOnOnly:
+      return command->add_flag(name, *b.flag, info.help);
+    case FlagNames::kOffOnly:
+      return command->add_flag_callback(OffFlagName(info, prefix), [flag = b.flag] { *flag = false; }, info.help);
+    case FlagNames::kOnAndOff:
+      break;
+  }
+  return command->add_flag(name + ",!" + OffFlagName(info, prefix), *b.flag, info.help)->default_str(info.default_text);
+}
+
+CLI::Option* AddValue(CLI::App* command, const OptionBinding& b, const std::string& name) {
+  const OptionInfo& info = b.info;
+  CLI::Option* option = nullptr;
+  if (info.list) {
+    // A list whose values do not make whole items (3 numbers each) is a usage error, as a bad value.
+    option = command->add_option_function<std::vector<std::string>>(
+        name,
+        [set = b.set_list, name](const std::vector<std::string>& values) {
+          try {
+            set(values);
+          } catch (const Error& e) {
+            throw CLI::ValidationError(name, e.what());
+          }
+        },
+        info.help);
+    option->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+    if (info.arity > 1) option->expected(info.arity);
+    if (info.separator != 0) option->delimiter(info.separator);
+  } else {
+    option = command->add_option_function<std::string>(
+        name, [set = b.set](const std::string& text) { set(text); }, info.help);
+  }
+  option->type_name(TypeName(info.kind))->default_str(info.default_text)->check(RuleValidator(info));
+  switch (info.path) {
+    case OptionPath::kExistingFile:
+      option->check(CLI::ExistingFile);
+      break;
+    case OptionPath::kExistingDirectory:
+      option->check(CLI::ExistingDirectory);
+      break;
+    case OptionPath::kExistingPath:
+      option->check(CLI::ExistingPath);
+      break;
+    case OptionPath::kAny:
+      break;
+  }
+  if (info.required) option->required();
+  return option;
+}
+
 }  // namespace
 
 void AddTableOptions(CLI::App* command, const std::vector<OptionBinding>& bindings, const std::string& prefix,
@@ -68,23 +122,25 @@ void AddTableOptions(CLI::App* command, const std::vector<OptionBinding>& bindin
   for (const OptionBinding& b : bindings) {
     const OptionInfo& info = b.info;
     if (info.internal) continue;
-    const std::string name =
-        (info.short_flag != 0 ? "-" + std::string(1, info.short_flag) + "," : "") + CommandLineName(info.flag, prefix);
-    if (info.kind == OptionKind::kFlag) {
-      command->add_flag(name + ",!" + OffFlagName(info, prefix), *b.flag, info.help)
-          ->default_str(info.default_text)
-          ->group(group);
-    } else {
-      command
-          ->add_option_function<std::string>(
-              name, [set = b.set](const std::string& text) { set(text); }, info.help)
-          ->type_name(TypeName(info.kind))
-          ->default_str(info.default_text)
-          ->check(RuleValidator(info))
-          ->group(group);
-    }
+    const std::string name = (info.short_flag != 0 ? "-" + std::string(1, info.short_flag) + "," : "") +
+                             CommandLineName(info, prefix);
+    CLI::Option* option =
+        info.kind == OptionKind::kFlag ? AddFlag(command, b, name, prefix) : AddValue(command, b, name);
+    option->group(group);
     for (const auto& [old_flag, value] : info.deprecated) AddDeprecated(command, b, prefix, old_flag, value);
   }
+}
+
+std::vector<OptionBinding> Only(const std::vector<OptionBinding>& bindings, const std::vector<std::string>& names) {
+  std::vector<OptionBinding> picked;
+  for (const std::string& name : names) {
+    const size_t before = picked.size();
+    for (const OptionBinding& b : bindings) {
+      if (b.info.name == name) picked.push_back(b);
+    }
+    SAMP_CHECK(picked.size() == before + 1) << "no option " << name;
+  }
+  return picked;
 }
 
 void AddListOption(CLI::App* command, const std::vector<OptionBinding>& bindings, const std::string& name,

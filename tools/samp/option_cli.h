@@ -1,7 +1,9 @@
 // Command-line options from an option table (libsamp/core/option_table.h):
 // every field not marked internal becomes one CLI11 option named as the table
-// says, with its help, its default and its rule checked at parse time; a
-// field's deprecated names still work and print a note naming the new one.
+// says (or a positional argument), with its help, its default and its rule
+// checked at parse time (a path: that it exists, as the table says; a list:
+// each value); a field's deprecated names still work and print a note naming
+// the new one.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -17,6 +19,10 @@ namespace samp::tools {
 // options in --help.
 void AddTableOptions(CLI::App* command, const std::vector<OptionBinding>& bindings, const std::string& prefix,
                      const std::string& group);
+
+// The bindings named `names` (OptionInfo::name), in that order: a part of a
+// table registered at its place among other options or in its own group.
+std::vector<OptionBinding> Only(const std::vector<OptionBinding>& bindings, const std::vector<std::string>& names);
 
 // `name` A,B,...: sets the fields `fields` (names in `bindings`) at once, each checked by its rule.
 void AddListOption(CLI::App* command, const std::vector<OptionBinding>& bindings, const std::string& name,
