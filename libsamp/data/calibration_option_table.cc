@@ -31,6 +31,10 @@ OptionTable<DetectorNoiseOptions> MakeDetectorNoiseTable() {
   t.Add("correct_correlation", &O::correct_correlation,
         "measure how the errors are correlated between frames and undo what the smoother absorbs of them (off: "
         "white errors)");
+  t.Add("correlation_pairs_per_cue", &O::correlation_pairs_per_cue,
+        "each cue gets a correlation of its own with at least this many pairs of consecutive detections per cue; "
+        "fewer: one correlation measured on all cues together")
+      .AtLeast(30);
   return t;
 }
 

@@ -414,34 +414,49 @@ TrackResiduals TrackResidualsOf(const LinkedTrack& track, const std::map<int, co
 }
 
 // Estimates each cue's correlation between frames from the residuals of every
-// track (or takes 0 = white), and scales each track's residuals to the
-// variance of the errors: a smoother with q parameters per coordinate leaves
-// n - q degrees of freedom of white errors, fewer of correlated ones.
+// track (one value for all cues when a cue has too few pairs for its own; or
+// 0 = white), and scales each track's residuals to the variance of the
+// errors: a smoother with q parameters per coordinate leaves n - q degrees of
+// freedom of white errors, fewer of correlated ones.
 // Returns a note when the correlation could not be measured.
 std::string CorrectShrinkage(const DetectorNoiseOptions& o, std::vector<TrackResiduals>* tracks,
                              DetectorNoiseModel* model) {
   std::string note;
   double rho[kNumCues] = {0, 0, 0, 0, 0, 0, 0};
-  int fewest_pairs = -1;
   if (o.correct_correlation) {
+    FrameCorrelationOptions co;
+    co.trim_sigmas = o.trim_sigmas;
+    std::vector<SmoothedSeries> cues[kNumCues];
+    FrameCorrelation per_cue[kNumCues];
+    int fewest_pairs = -1;
     for (int c = 0; c < kNumCues; ++c) {
-      std::vector<SmoothedSeries> all;
-      for (const TrackResiduals& t : *tracks) all.push_back(t.series[c]);
-      FrameCorrelationOptions co;
-      co.trim_sigmas = o.trim_sigmas;
-      const FrameCorrelation f = EstimateFrameCorrelation(all, co);
-      rho[c] = f.rho;
-      fewest_pairs = fewest_pairs < 0 ? f.num_pairs : std::min(fewest_pairs, f.num_pairs);
+      for (const TrackResiduals& t : *tracks) cues[c].push_back(t.series[c]);
+      per_cue[c] = EstimateFrameCorrelation(cues[c], co);
+      fewest_pairs = fewest_pairs < 0 ? per_cue[c].num_pairs : std::min(fewest_pairs, per_cue[c].num_pairs);
     }
-    const bool measured = fewest_pairs >= FrameCorrelationOptions().min_pairs;
-    if (measured) {
+    const bool shared = fewest_pairs < o.correlation_pairs_per_cue;
+    int pairs = fewest_pairs;
+    if (shared) {
+      std::vector<SmoothedSeries> all;
+      for (std::vector<SmoothedSeries>& cue : cues) {
+        NormaliseSeries(&cue);
+        all.insert(all.end(), cue.begin(), cue.end());
+      }
+      const FrameCorrelation f = EstimateFrameCorrelation(all, co);
+      std::fill(rho, rho + kNumCues, f.rho);
+      pairs = f.num_pairs;
+    } else {
+      for (int c = 0; c < kNumCues; ++c) rho[c] = per_cue[c].rho;
+    }
+    if (pairs >= co.min_pairs) {
       std::copy(rho, rho + kNumCues, model->correlation);
-      model->correlation_pairs = fewest_pairs;
+      model->correlation_pairs = pairs;
+      model->correlation_shared = shared;
       model->correlation_estimated = true;
     } else {
       std::fill(rho, rho + kNumCues, 0.0);
-      note = "correlation: " + std::to_string(std::max(fewest_pairs, 0)) + " pairs of consecutive detections (need " +
-             std::to_string(FrameCorrelationOptions().min_pairs) + "): white errors assumed";
+      note = "correlation: " + std::to_string(std::max(pairs, 0)) + " pairs of consecutive detections (need " +
+             std::to_string(co.min_pairs) + "): white errors assumed";
     }
   }
   for (TrackResiduals& t : *tracks) {
@@ -526,7 +541,7 @@ std::string DetectorNoiseModel::BriefReport() const {
   if (correlation_estimated)
     s << "; correlation between frames along/across/vertical " << correlation[0] << "/" << correlation[1] << "/"
       << correlation[2] << ", h/w/l " << correlation[3] << "/" << correlation[4] << "/" << correlation[5]
-      << ", yaw " << correlation[6];
+      << ", yaw " << correlation[6] << (correlation_shared ? " (one value for all cues)" : "");
   s << "; flips "
     << 100 * flip_rate << " %, misses " << 100 * miss_rate << " %, " << false_positives_per_frame
     << " false positives per frame; " << num_tracks << " tracks, " << num_frames << " frames";
@@ -596,6 +611,7 @@ constexpr const char* kCueNames[7] = {"along", "across", "vertical", "height", "
 static void CorrelationFields(OptionsJson& io, DetectorNoiseModel& m) {
   for (int c = 0; c < 7; ++c) io(kCueNames[c], m.correlation[c]);
   io("pairs", m.correlation_pairs);
+  io.Optional("shared", m.correlation_shared, false);
 }
 
 std::string DetectorNoiseModel::ToJson() const {
@@ -662,9 +678,6 @@ DetectorNoiseModel ReadDetectorNoiseModel(const std::string& path) {
 
 void DetectorNoiseOptions::Check() const {
   DetectorNoiseOptionTable().Check(*this);
-  SAMP_CHECK(!bin_edges.empty() && bin_edges.front() >= 0) << "DetectorNoiseOptions.bin_edges must start at >= 0";
-  for (size_t i = 1; i < bin_edges.size(); ++i)
-    SAMP_CHECK(bin_edges[i] > bin_edges[i - 1]) << "DetectorNoiseOptions.bin_edges must increase";
 }
 
 DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequences,

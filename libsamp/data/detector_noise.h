@@ -73,11 +73,15 @@ struct DetectorNoiseModel {
   // The correlation of the errors between consecutive frames per cue (along,
   // across, vertical, height, width, length, yaw), as self-calibration measured
   // it and corrected the residuals' shrinkage with (residual_correlation.h);
-  // the fewest lag-1 pairs behind a cue. In the JSON as "correlation" only
-  // when measured (every cue from at least 30 pairs).
+  // the fewest lag-1 pairs behind a cue. `correlation_shared`: too few pairs
+  // per cue for a value of its own (DetectorNoiseOptions::
+  // correlation_pairs_per_cue), so every cue has the one value measured on
+  // all cues' residuals together, and `correlation_pairs` counts those. In the
+  // JSON as "correlation" only when measured (from at least 30 pairs).
   bool correlation_estimated = false;
   double correlation[7] = {0, 0, 0, 0, 0, 0, 0};
   int correlation_pairs = 0;
+  bool correlation_shared = false;
   // The time constant (frames) of the mean measured correlation, -1 / ln rho
   // (0: white), for FitOptions::detection_correlation_frames.
   double CorrelationFrames() const;
@@ -122,6 +126,11 @@ struct DetectorNoiseOptions {
   // Measure how the errors are correlated between frames and undo the
   // smoother's shrinkage of correlated residuals (off: white, n - q).
   bool correct_correlation = true;
+  // A cue gets a correlation of its own when every cue has at least this many
+  // lag-1 pairs; with fewer the per-cue estimates scatter by about 0.1-0.2
+  // and the correction is steep near rho = 1, so one correlation is measured
+  // on all cues' residuals (each on its robust scale) together.
+  int correlation_pairs_per_cue = 1000;
 
   void Check() const;  // throws samp::Error naming the field
 };

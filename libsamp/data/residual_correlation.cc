@@ -33,6 +33,17 @@ double MedianOf(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// 1.4826 x the median |r_i| over the used residuals of every series (checked).
+double RobustSigma(const std::vector<SmoothedSeries>& series) {
+  std::vector<double> magnitudes;
+  for (const SmoothedSeries& s : series) {
+    CheckSeries(s);
+    for (size_t i = 0; i < s.residuals.size(); ++i)
+      if (s.used[i]) magnitudes.push_back(std::abs(s.residuals[i]));
+  }
+  return 1.4826 * MedianOf(magnitudes);
+}
+
 }  // namespace
 
 // M = C - H C - C H^T + H C H^T with H = A G A^T W, G = (A^T W A)^-1:
@@ -89,17 +100,18 @@ double ShrinkageScale(const SmoothedSeries& s, double rho) {
   return std::sqrt(count / std::max(trace, kMinShare * count));
 }
 
+void NormaliseSeries(std::vector<SmoothedSeries>* series) {
+  const double sigma = RobustSigma(*series);
+  if (!(sigma > 0)) return;
+  for (SmoothedSeries& s : *series)
+    for (double& r : s.residuals) r /= sigma;
+}
+
 FrameCorrelation EstimateFrameCorrelation(const std::vector<SmoothedSeries>& series,
                                           const FrameCorrelationOptions& o) {
   SAMP_CHECK(o.trim_sigmas > 0 && o.max_rho >= 0 && o.max_rho < 1 && o.step > 0)
       << "FrameCorrelationOptions: trim_sigmas > 0, max_rho in [0, 1) and step > 0 required";
-  std::vector<double> magnitudes;
-  for (const SmoothedSeries& s : series) {
-    CheckSeries(s);
-    for (size_t i = 0; i < s.residuals.size(); ++i)
-      if (s.used[i]) magnitudes.push_back(std::abs(s.residuals[i]));
-  }
-  const double limit = o.trim_sigmas * 1.4826 * MedianOf(magnitudes);
+  const double limit = o.trim_sigmas * RobustSigma(series);
   FrameCorrelation result;
   double observed_next = 0, observed_square = 0;
   std::vector<std::vector<bool>> kept;

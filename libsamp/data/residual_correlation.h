@@ -57,6 +57,12 @@ struct FrameCorrelation {
   bool measured = false;  // at least min_pairs pairs (else rho = 0)
 };
 
+// Divides the residuals of `series` (one cue) by their robust sigma, 1.4826
+// times the median |r_i| of the used ones, so that cues in different units
+// can enter one EstimateFrameCorrelation together. No change when every used
+// residual is 0.
+void NormaliseSeries(std::vector<SmoothedSeries>* series);
+
 // The rho in [0, max_rho] whose expected ratio sum M(i, i+1) / sum M_ii over
 // the used residuals of every series (pairs of consecutive frames only)
 // is nearest to the observed sum r_i r_{i+1} / sum r_i^2.

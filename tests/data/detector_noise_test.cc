@@ -289,6 +289,33 @@ TEST(DetectorNoiseSelf, CorrelatedErrorsRecovered) {
   EXPECT_LT(w.along_sigma_a + w.along_sigma_b * 30, 0.85 * (n.along_a + n.along_b * 30));
 }
 
+// One sequence of 12 tracks: about 250 pairs per cue, too few for a value of
+// each cue's own (it would scatter by 0.1-0.2, and the correction is steep
+// near 1); one correlation from all cues together.
+TEST(DetectorNoiseSelf, FewPairsShareOneCorrelation) {
+  TrueNoise n = AllNoise(0.10);
+  n.correlation_frames = 3.0;
+  const std::vector<LinkedSequence> sequences = Sequences(n, 16, 1);
+  const DetectorNoiseModel m = EstimateDetectorNoise(sequences, DetectorNoiseOptions(), TrackerOptions());
+  ASSERT_TRUE(m.correlation_estimated);
+  EXPECT_TRUE(m.correlation_shared);
+  EXPECT_GT(m.correlation_pairs, 1000);  // all cues' pairs
+  for (int c = 1; c < 7; ++c) EXPECT_EQ(m.correlation[c], m.correlation[0]);
+  EXPECT_NEAR(m.correlation[0], std::exp(-1.0 / 3.0), 0.1) << m.BriefReport();
+  EXPECT_NE(m.BriefReport().find("one value for all cues"), std::string::npos);
+  const std::string json = m.ToJson();
+  EXPECT_TRUE(nlohmann::json::parse(json)["correlation"]["shared"].get<bool>());
+  EXPECT_EQ(DetectorNoiseModelFromJson(json, "model.json").ToJson(), json);
+
+  DetectorNoiseOptions own;
+  own.correlation_pairs_per_cue = 30;
+  const DetectorNoiseModel p = EstimateDetectorNoise(sequences, own, TrackerOptions());
+  ASSERT_TRUE(p.correlation_estimated);
+  EXPECT_FALSE(p.correlation_shared);
+  EXPECT_LT(p.correlation_pairs, m.correlation_pairs);
+  EXPECT_EQ(nlohmann::json::parse(p.ToJson())["correlation"].count("shared"), 0u);
+}
+
 TEST(DetectorNoiseSelf, TooFewDetectionsKeepTheDefaultsWithANote) {
   const TrueNoise n = AllNoise(0.0);
   std::vector<LinkedSequence> one = Sequences(n, 14, 1);
