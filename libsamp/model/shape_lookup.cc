@@ -331,12 +331,12 @@ bool ShapeLookup::LineariseInsideBoxSize(const Eigen::VectorXd& z, double step,
   // Every box equals InsideBox's at the same code, bit for bit.
   const int nr = num_components_;
   const size_t d = mean_.size();
-  thread_local std::vector<double> base;
+  // phi_z in double: the thread's dense grid of z (DenseCached; its floats are
+  // Dense()'s), shared with the evaluations at z that follow or precede.
+  const double* base = DenseCached(z.data());
   thread_local std::vector<uint8_t> negative;
   thread_local std::vector<int64_t> band;
-  base.resize(d);
   negative.resize(d);
-  DenseAnyR(mean_.data(), components_.data(), nr, z.data(), d, base.data());
   for (size_t v = 0; v < d; ++v) negative[v] = float(base[v]) < 0.0f;
   std::vector<uint8_t> has[3], core_has[3];
   InsideSlices(grid_, negative.data(), [](uint8_t v) { return v != 0; }, has);
