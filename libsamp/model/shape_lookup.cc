@@ -131,6 +131,86 @@ void DenseAnyR(const float* mean, const float* components, int num_components, c
   }
 }
 
+// phi_z = mu + W z at voxel v, as DenseKernel computes it (the same sum in
+// the same order, then cast to float).
+inline float VoxelValue(const float* mean, const float* components, int num_components, const double* z,
+                        int64_t v) {
+  const float* row = components + size_t(v) * size_t(num_components);
+  double s = mean[v];
+  for (int r = 0; r < num_components; ++r) s += double(row[r]) * z[r];
+  return float(s);
+}
+
+// The inside box from the slices along each axis that hold an inside voxel
+// (has[a][slice] != 0), the voxels' signs (negative(index)) and, where a
+// crossing towards an outside neighbour is interpolated, their values
+// (value(index)): the inside voxels' positions and those crossings, extreme
+// in the first and last inside slices; the second slices are scanned too (a
+// crossing one voxel back can tie the first slice's).
+template <typename Negative, typename Value>
+AlignedBox BoxFromSlices(const GridSpec& grid, const std::vector<uint8_t>* has, Negative negative, Value value) {
+  const Eigen::Vector3i& n = grid.dims;
+  const int64_t stride[3] = {1, int64_t(n.x()), int64_t(n.x()) * n.y()};
+  AlignedBox box;
+  for (int a = 0; a < 3; ++a) {
+    int lo = 0, hi = n[a] - 1;
+    while (lo < n[a] && !has[a][size_t(lo)]) ++lo;
+    if (lo == n[a]) return AlignedBox();  // phi_z >= 0 everywhere
+    while (!has[a][size_t(hi)]) --hi;
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    auto scan = [&](int slice, int side, double* extreme) {
+      if (slice < 0 || slice >= n[a]) return;
+      const double position = grid.origin[a] + grid.voxel_size * double(slice);
+      const bool has_neighbour = slice + side >= 0 && slice + side < n[a];
+      for (int q = 0; q < n[c]; ++q) {
+        for (int p = 0; p < n[b]; ++p) {
+          const int64_t index = slice * stride[a] + p * stride[b] + q * stride[c];
+          if (!negative(index)) continue;
+          double x = position;
+          if (has_neighbour) {
+            const int64_t neighbour = index + side * stride[a];
+            if (!negative(neighbour)) {
+              const float v = value(index), w = value(neighbour);
+              const double e = position + side * grid.voxel_size * double(v) / double(v - w);
+              x = side < 0 ? std::min(x, e) : std::max(x, e);
+            }
+          }
+          *extreme = side < 0 ? std::min(*extreme, x) : std::max(*extreme, x);
+        }
+      }
+    };
+    double low = std::numeric_limits<double>::infinity(), high = -low;
+    scan(lo, -1, &low);
+    scan(lo + 1, -1, &low);
+    scan(hi, +1, &high);
+    scan(hi - 1, +1, &high);
+    box.min[a] = low;
+    box.max[a] = high;
+  }
+  return box;
+}
+
+// The slices along each axis that hold a voxel with negative(row[i]) (all
+// voxels scanned; values: phi or its signs, in GridSpec::Index order).
+template <typename T, typename Negative>
+void InsideSlices(const GridSpec& grid, const T* values, Negative negative, std::vector<uint8_t>* has) {
+  const Eigen::Vector3i& n = grid.dims;
+  for (int a = 0; a < 3; ++a) has[a].assign(size_t(n[a]), 0);
+  for (int k = 0; k < n.z(); ++k) {
+    for (int j = 0; j < n.y(); ++j) {
+      const T* row = values + grid.Index(0, j, k);
+      uint8_t any = 0;
+      for (int i = 0; i < n.x(); ++i) {
+        const uint8_t inside = negative(row[i]);
+        has[0][size_t(i)] |= inside;
+        any |= inside;
+      }
+      has[1][size_t(j)] |= any;
+      has[2][size_t(k)] |= any;
+    }
+  }
+}
+
 // The per-thread dense grid of the last code asked for.
 struct DenseCache {
   uint64_t owner = 0;
@@ -161,6 +241,8 @@ ShapeLookup::ShapeLookup(const ShapeModel& model)
     float* row = &components_[size_t(v) * num_components_];
     for (int r = 0; r < num_components_; ++r) row[r] = model.components(v, r);
   }
+  for (size_t v = 0; v < mean_.size(); ++v) max_abs_mean_ = std::max(max_abs_mean_, std::abs(double(mean_[v])));
+  for (const float w : components_) max_abs_component_ = std::max(max_abs_component_, std::abs(double(w)));
   sigmas_ = model.eigenvalues.cwiseSqrt();
   max_corner_ = grid_.MaxCorner();
   inv_voxel_ = 1.0 / grid_.voxel_size;
@@ -226,69 +308,14 @@ std::vector<float> ShapeLookup::Dense(const Eigen::VectorXd& z) const {
 AlignedBox ShapeLookup::InsideBox(const Eigen::VectorXd& z) const {
   SAMP_CHECK(z.size() == num_components_)
       << "shape code has " << z.size() << " values, model has " << num_components_;
-  // phi_z as floats (as Dense()), in a per-thread buffer.
+  // phi_z as floats (as Dense()) and its signs, in per-thread buffers.
   thread_local std::vector<float> phi;
   phi.resize(mean_.size());
   DenseAnyR(mean_.data(), components_.data(), num_components_, z.data(), mean_.size(), phi.data());
-  const Eigen::Vector3i& n = grid_.dims;
-  const int64_t stride[3] = {1, int64_t(n.x()), int64_t(n.x()) * n.y()};
-  // The slices along each axis that hold a voxel with phi < 0.
-  std::vector<uint8_t> has[3] = {std::vector<uint8_t>(size_t(n.x()), 0), std::vector<uint8_t>(size_t(n.y()), 0),
-                                 std::vector<uint8_t>(size_t(n.z()), 0)};
-  for (int k = 0; k < n.z(); ++k) {
-    for (int j = 0; j < n.y(); ++j) {
-      const float* row = &phi[size_t(grid_.Index(0, j, k))];
-      uint8_t any = 0;
-      for (int i = 0; i < n.x(); ++i) {
-        const uint8_t negative = row[i] < 0.0f;
-        has[0][size_t(i)] |= negative;
-        any |= negative;
-      }
-      has[1][size_t(j)] |= any;
-      has[2][size_t(k)] |= any;
-    }
-  }
-  AlignedBox box;
-  for (int a = 0; a < 3; ++a) {
-    int lo = 0, hi = n[a] - 1;
-    while (lo < n[a] && !has[a][size_t(lo)]) ++lo;
-    if (lo == n[a]) return AlignedBox();  // phi_z >= 0 everywhere
-    while (!has[a][size_t(hi)]) --hi;
-    // The box's extent along a: the inside voxels' positions and their zero
-    // crossings towards outside neighbours along a (linear interpolation),
-    // extreme in the first and last inside slices; the second slices are
-    // scanned too (a crossing one voxel back can tie the first slice's).
-    const int b = (a + 1) % 3, c = (a + 2) % 3;
-    auto scan = [&](int slice, int side, double* extreme) {
-      if (slice < 0 || slice >= n[a]) return;
-      const double position = grid_.origin[a] + grid_.voxel_size * double(slice);
-      const bool has_neighbour = slice + side >= 0 && slice + side < n[a];
-      for (int q = 0; q < n[c]; ++q) {
-        for (int p = 0; p < n[b]; ++p) {
-          const int64_t index = slice * stride[a] + p * stride[b] + q * stride[c];
-          const float v = phi[size_t(index)];
-          if (!(v < 0.0f)) continue;
-          double x = position;
-          if (has_neighbour) {
-            const float w = phi[size_t(index + side * stride[a])];
-            if (!(w < 0.0f)) {
-              const double e = position + side * grid_.voxel_size * double(v) / double(v - w);
-              x = side < 0 ? std::min(x, e) : std::max(x, e);
-            }
-          }
-          *extreme = side < 0 ? std::min(*extreme, x) : std::max(*extreme, x);
-        }
-      }
-    };
-    double low = std::numeric_limits<double>::infinity(), high = -low;
-    scan(lo, -1, &low);
-    scan(lo + 1, -1, &low);
-    scan(hi, +1, &high);
-    scan(hi - 1, +1, &high);
-    box.min[a] = low;
-    box.max[a] = high;
-  }
-  return box;
+  std::vector<uint8_t> has[3];
+  InsideSlices(grid_, phi.data(), [](float v) { return v < 0.0f; }, has);
+  return BoxFromSlices(
+      grid_, has, [&](int64_t v) { return phi[size_t(v)] < 0.0f; }, [&](int64_t v) { return phi[size_t(v)]; });
 }
 
 bool ShapeLookup::LineariseInsideBoxSize(const Eigen::VectorXd& z, double step,
@@ -296,16 +323,103 @@ bool ShapeLookup::LineariseInsideBoxSize(const Eigen::VectorXd& z, double step,
   SAMP_CHECK(int(z.size()) == num_components_ && step > 0.0)
       << "LineariseInsideBoxSize: code of " << z.size() << " values (expected " << num_components_
       << ") or step " << step << " <= 0";
-  const AlignedBox box = InsideBox(z);
+  // InsideBox at z and at z +- h e_i, the latter without their dense grids:
+  // phi at z +- h e_i differs from phi_z by at most |W_vi| h at voxel v (up to
+  // rounding, which `margin` bounds), so only the voxels with
+  // |phi_z| <= max_i |W_vi| h_i (the band) can take another sign; their signs
+  // are decided from phi_z where the bound allows, else from their value.
+  // Every box equals InsideBox's at the same code, bit for bit.
+  const int nr = num_components_;
+  const size_t d = mean_.size();
+  // phi_z in double: the thread's dense grid of z (DenseCached; its floats are
+  // Dense()'s), shared with the evaluations at z that follow or precede.
+  const double* base = DenseCached(z.data());
+  thread_local std::vector<uint8_t> negative;
+  thread_local std::vector<int64_t> band;
+  negative.resize(d);
+  for (size_t v = 0; v < d; ++v) negative[v] = float(base[v]) < 0.0f;
+  std::vector<uint8_t> has[3], core_has[3];
+  InsideSlices(grid_, negative.data(), [](uint8_t v) { return v != 0; }, has);
+  const AlignedBox box = BoxFromSlices(
+      grid_, has, [&](int64_t v) { return negative[size_t(v)] != 0; },
+      [&](int64_t v) { return float(base[size_t(v)]); });
   if (box.IsEmpty()) return false;
   out->size = box.Size();
-  out->jacobian.resize(3, num_components_);
-  for (int i = 0; i < num_components_; ++i) {
+  out->jacobian.resize(3, nr);
+
+  // The steps h_i as taken (z_i +- h minus z_i, rounded) and a bound on the
+  // rounding of the sums mu + W z in double: (R + 1) ulp of their absolute terms.
+  Eigen::VectorXd plus_step(nr), minus_step(nr);
+  double largest = max_abs_mean_;
+  for (int i = 0; i < nr; ++i) {
+    const double h = step * sigmas_[i];
+    plus_step[i] = std::abs((z[i] + h) - z[i]);
+    minus_step[i] = std::abs((z[i] - h) - z[i]);
+    largest += max_abs_component_ * (std::abs(z[i]) + 2.0 * h);
+  }
+  const double margin = 1e-12 * double(nr + 1) * largest + 1e-30;
+  // The band, and the voxels inside at every step (negative stays set).
+  const double widest = max_abs_component_ * std::max(plus_step.maxCoeff(), minus_step.maxCoeff());
+  band.clear();
+  for (size_t v = 0; v < d; ++v) {
+    const double s = base[v];
+    if (s > widest + margin) {
+      negative[v] = 0;
+      continue;
+    }
+    if (s < -widest - margin) {
+      negative[v] = 1;
+      continue;
+    }
+    const float* row = &components_[v * size_t(nr)];
+    double reach = 0.0;
+    for (int i = 0; i < nr; ++i) {
+      reach = std::max(reach, std::abs(double(row[i])) * std::max(plus_step[i], minus_step[i]));
+    }
+    if (s > reach + margin) {
+      negative[v] = 0;
+    } else if (s < -reach - margin) {
+      negative[v] = 1;
+    } else {
+      band.push_back(int64_t(v));
+      negative[v] = 0;
+    }
+  }
+  // The core's slices (the band's voxels are still unset).
+  InsideSlices(grid_, negative.data(), [](uint8_t v) { return v != 0; }, core_has);
+  const int64_t nx = grid_.dims.x(), nxy = nx * grid_.dims.y();
+
+  auto box_at = [&](const Eigen::VectorXd& code, int i, double taken) {
+    for (int a = 0; a < 3; ++a) has[a] = core_has[a];
+    for (const int64_t v : band) {
+      const double s = base[size_t(v)];
+      const double change = std::abs(double(components_[size_t(v) * size_t(nr) + size_t(i)])) * taken;
+      bool inside;
+      if (s - change > margin) {
+        inside = false;
+      } else if (s + change < -margin) {
+        inside = true;
+      } else {
+        inside = VoxelValue(mean_.data(), components_.data(), nr, code.data(), v) < 0.0f;
+      }
+      negative[size_t(v)] = inside;
+      if (inside) {
+        const int64_t k = v / nxy, j = (v - k * nxy) / nx;
+        has[0][size_t(v - k * nxy - j * nx)] = 1;
+        has[1][size_t(j)] = 1;
+        has[2][size_t(k)] = 1;
+      }
+    }
+    return BoxFromSlices(
+        grid_, has, [&](int64_t v) { return negative[size_t(v)] != 0; },
+        [&](int64_t v) { return VoxelValue(mean_.data(), components_.data(), nr, code.data(), v); });
+  };
+  for (int i = 0; i < nr; ++i) {
     const double h = step * sigmas_[i];
     Eigen::VectorXd plus = z, minus = z;
     plus[i] += h;
     minus[i] -= h;
-    const AlignedBox a = InsideBox(plus), b = InsideBox(minus);
+    const AlignedBox a = box_at(plus, i, plus_step[i]), b = box_at(minus, i, minus_step[i]);
     if (a.IsEmpty() || b.IsEmpty()) return false;
     out->jacobian.col(i) = (a.Size() - b.Size()) / (2.0 * h);
   }

@@ -107,6 +107,8 @@ class ShapeLookup {
   Eigen::VectorXd sigmas_;
   Eigen::Vector3d max_corner_;
   double inv_voxel_ = 1.0;
+  double max_abs_mean_ = 0.0;       // max |mu_v|
+  double max_abs_component_ = 0.0;  // max |W_vr|
 };
 
 }  // namespace samp

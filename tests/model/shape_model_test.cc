@@ -195,6 +195,62 @@ TEST(ShapeLookup, InsideBoxEqualsTheFullScan) {
   EXPECT_TRUE(ShapeLookup(empty).InsideBox(Eigen::VectorXd::Zero(5)).IsEmpty());
 }
 
+// The linearised box size from InsideBox at the code and at the steps, as
+// LineariseInsideBoxSize documents it (the reference it must equal bit for bit).
+bool LineariseByInsideBoxes(const ShapeLookup& lookup, const Eigen::VectorXd& z, double step,
+                            ShapeLookup::BoxSizeLinearisation* out) {
+  const AlignedBox box = lookup.InsideBox(z);
+  if (box.IsEmpty()) return false;
+  out->size = box.Size();
+  out->jacobian.resize(3, lookup.num_components());
+  for (int i = 0; i < lookup.num_components(); ++i) {
+    const double h = step * lookup.sigmas()[i];
+    Eigen::VectorXd plus = z, minus = z;
+    plus[i] += h;
+    minus[i] -= h;
+    const AlignedBox a = lookup.InsideBox(plus), b = lookup.InsideBox(minus);
+    if (a.IsEmpty() || b.IsEmpty()) return false;
+    out->jacobian.col(i) = (a.Size() - b.Size()) / (2.0 * h);
+  }
+  return true;
+}
+
+TEST(ShapeLookup, LinearisedInsideBoxSizeEqualsTheBoxesAtTheSteps) {
+  // Random fields (signs change everywhere, inside voxels on the border), a
+  // ball (a thin band of voxels that can change sign) and steps from a
+  // hundredth of a sigma to two sigmas.
+  ShapeModel ball = RandomModel(5, 3);
+  for (int k = 0; k < ball.grid.dims.z(); ++k)
+    for (int j = 0; j < ball.grid.dims.y(); ++j)
+      for (int i = 0; i < ball.grid.dims.x(); ++i) {
+        const int64_t v = ball.grid.Index(i, j, k);
+        ball.mean[v] = float(ball.grid.Position(i, j, k).norm() - 0.17);
+        for (int c = 0; c < 5; ++c) ball.components(v, c) *= 0.02f;
+      }
+  const std::vector<ShapeModel> models = {RandomModel(3, 43), RandomModel(5, 45), ball};
+  int compared = 0;
+  for (const ShapeModel& model : models) {
+    const ShapeLookup lookup(model);
+    const int r = lookup.num_components();
+    std::mt19937 rng(11);
+    std::normal_distribution<double> n(0.0, 1.0);
+    for (int trial = 0; trial < 12; ++trial) {
+      Eigen::VectorXd z(r);
+      for (int c = 0; c < r; ++c) z[c] = (trial == 0 ? 0.0 : 0.8) * n(rng);
+      for (const double step : {0.01, 0.5, 2.0}) {
+        ShapeLookup::BoxSizeLinearisation fast, reference;
+        const bool ok = lookup.LineariseInsideBoxSize(z, step, &fast);
+        ASSERT_EQ(ok, LineariseByInsideBoxes(lookup, z, step, &reference)) << "trial " << trial << " step " << step;
+        if (!ok) continue;
+        ++compared;
+        EXPECT_EQ(fast.size, reference.size) << "trial " << trial << " step " << step;
+        EXPECT_EQ(fast.jacobian, reference.jacobian) << "trial " << trial << " step " << step;
+      }
+    }
+  }
+  EXPECT_GT(compared, 60);
+}
+
 TEST(ShapeLookup, DenseCacheFollowsTheCodeAndTheLookup) {
   const ShapeModel model_a = RandomModel(3, 11), model_b = RandomModel(3, 12);
   const ShapeLookup a(model_a), b(model_b);

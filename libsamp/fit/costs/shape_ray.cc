@@ -24,6 +24,53 @@ void PointOnRay(const double* origin, const double* direction, double t, double*
   for (int a = 0; a < 3; ++a) p[a] = origin[a] + t * direction[a];
 }
 
+// lookup.EvaluateDense(phi_z, p, g, nullptr), bit for bit, with a short
+// inlined path for points inside the grid box (the general one for the others
+// and for non-finite points): the value and gradient of the Newton steps.
+class DenseGradient {
+ public:
+  explicit DenseGradient(const ShapeLookup& lookup)
+      : lookup_(lookup),
+        lo_(lookup.grid().MinCorner()),
+        hi_(lookup.grid().MaxCorner()),
+        inv_voxel_(1.0 / lookup.grid().voxel_size),
+        nx_(lookup.grid().dims.x()),
+        nxy_(int64_t(lookup.grid().dims.x()) * lookup.grid().dims.y()) {}
+
+  double operator()(const double* phi, const double* point, double* g) const {
+    if (!(point[0] >= lo_[0] && point[0] <= hi_[0] && point[1] >= lo_[1] && point[1] <= hi_[1] &&
+          point[2] >= lo_[2] && point[2] <= hi_[2])) {
+      return lookup_.EvaluateDense(phi, point, g, nullptr);
+    }
+    int i0[3];
+    double f[3];
+    for (int a = 0; a < 3; ++a) {
+      const double u = (point[a] - lo_[a]) * inv_voxel_;
+      const int i = std::min(std::max(int(u), 0), lookup_.grid().dims[a] - 2);
+      i0[a] = i;
+      f[a] = u - i;
+    }
+    const double* p = phi + (i0[0] + nx_ * i0[1] + nxy_ * i0[2]);
+    const double c[8] = {p[0], p[1], p[nx_], p[nx_ + 1], p[nxy_], p[nxy_ + 1], p[nxy_ + nx_], p[nxy_ + nx_ + 1]};
+    const double fx = f[0], fy = f[1], fz = f[2];
+    const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
+    const double c00 = gx * c[0] + fx * c[1], c10 = gx * c[2] + fx * c[3];
+    const double c01 = gx * c[4] + fx * c[5], c11 = gx * c[6] + fx * c[7];
+    const double c0 = gy * c00 + fy * c10, c1 = gy * c01 + fy * c11;
+    g[2] = (c1 - c0) * inv_voxel_;
+    g[1] = (gz * (c10 - c00) + fz * (c11 - c01)) * inv_voxel_;
+    g[0] = (gz * (gy * (c[1] - c[0]) + fy * (c[3] - c[2])) + fz * (gy * (c[5] - c[4]) + fy * (c[7] - c[6]))) *
+           inv_voxel_;
+    return gz * c0 + fz * c1 + 0.0;  // + the distance to the box, 0 inside
+  }
+
+ private:
+  const ShapeLookup& lookup_;
+  Eigen::Vector3d lo_, hi_;
+  double inv_voxel_;
+  int64_t nx_, nxy_;
+};
+
 // The crossing of origin + t direction bracketed in [lo, hi] (phi v_lo at lo
 // and v_hi at hi on either side of 0): a secant, then Newton steps kept
 // inside the bracket until |phi| is negligible. c, g_c and *v are those of
@@ -33,9 +80,10 @@ double RefineCrossing(const ShapeLookup& lookup, const double* phi_z, const doub
                       double* g_c, double* v) {
   double t = lo + (hi - lo) * v_lo / (v_lo - v_hi);
   const double tolerance = 1e-9 * lookup.grid().voxel_size;
+  const DenseGradient evaluate(lookup);
   for (int k = 0;; ++k) {
     PointOnRay(origin, direction, t, c);
-    *v = lookup.EvaluateDense(phi_z, c, g_c, nullptr);
+    *v = evaluate(phi_z, c, g_c);
     const double slope = g_c[0] * direction[0] + g_c[1] * direction[1] + g_c[2] * direction[2];
     if (k == kNewtonSteps || std::abs(*v) <= tolerance || slope == 0.0 || !std::isfinite(slope)) break;
     t = std::min(std::max(t - *v / slope, lo), hi);
