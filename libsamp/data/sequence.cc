@@ -3,6 +3,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <chrono>
 #include <filesystem>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
@@ -652,11 +653,15 @@ std::vector<Track> LoadSequenceTracks(const std::string& directory, const Sequen
   result.num_frames = static_cast<int>(range.indices.size());
   ReportFrameGaps(files, range.indices, &result);
 
+  const auto start = std::chrono::steady_clock::now();
   const std::vector<LinkedTrack> linked =
       LinkSequenceTracks(directory, reader, options, range.indices, range.index_of_frame, &result);
+  const auto linked_at = std::chrono::steady_clock::now();
+  result.seconds_tracking = std::chrono::duration<double>(linked_at - start).count();
   ReportTracking(files.name, &result);
   std::vector<Track> tracks = EmptyTracks(reader, linked);
   CountFrameSubstitutes(FillTrackFrames(reader, options, linked, range.index_of_frame, &tracks), &result);
+  result.seconds_frames = std::chrono::duration<double>(std::chrono::steady_clock::now() - linked_at).count();
   CountTrackFrames(files.name, tracks, &result);
   return tracks;
 }

@@ -171,6 +171,11 @@ struct SequenceSummary {
   int num_track_frames_without_points = 0;
   long long num_candidate_points = 0;
   std::vector<std::string> messages;  // every substitution/fallback, one line each
+  // Wall time of the two stages, s (not in BriefReport, which tracks.json
+  // records): linking the detections into tracks; reading the track frames
+  // (images, disparity or SGBM, ground plane, candidate points).
+  double seconds_tracking = 0.0;
+  double seconds_frames = 0.0;
   std::string BriefReport() const;
 };
 

@@ -40,14 +40,16 @@ std::string RunFitSummary::BriefReport() const {
   s << sequences.size() << " sequence(s) (" << num_sequences_failed << " failed), "
     << num_tracks_fitted << " track(s) fitted, " << num_tracks_failed << " failed, " << seconds
     << " s";
+  if (seconds_calibration > 0) s << " (self-calibration " << seconds_calibration << " s)";
   for (const auto& q : sequences) {
     s << "\n  " << (q.name.empty() ? q.directory : q.name) << ": ";
     if (!q.ok) {
       s << "FAILED: " << q.error;
       continue;
     }
-    s << q.num_fitted << "/" << q.num_tracks << " tracks, " << q.seconds << " s; tracker: "
-      << q.input.tracking.BriefReport();
+    s << q.num_fitted << "/" << q.num_tracks << " tracks, " << q.seconds << " s (frames "
+      << q.input.seconds_frames << " s, tracking " << q.input.seconds_tracking << " s, fit " << q.seconds_fit
+      << " s, output " << q.seconds_output << " s); tracker: " << q.input.tracking.BriefReport();
     for (const auto& f : q.track_failures) s << "\n    skipped " << f;
   }
   if (detector_model_used) s << "\n  detector model: " << calibration_report;
@@ -165,6 +167,7 @@ void FitSequence(const RunFitOptions& options, const std::string& folder, const 
   }
   std::vector<TrackFit> fits(tracks.size());
   std::vector<std::string> errors(tracks.size());
+  const auto fit_start = std::chrono::steady_clock::now();
   tbb::parallel_for(size_t(0), tracks.size(), [&](size_t t) {
     try {
       fits[t] = fitter->Fit(tracks[t]);
@@ -173,6 +176,8 @@ void FitSequence(const RunFitOptions& options, const std::string& folder, const 
       errors[t] = e.what();
     }
   });
+  const auto output_start = std::chrono::steady_clock::now();
+  result.seconds_fit = std::chrono::duration<double>(output_start - fit_start).count();
   std::vector<ObjectLabel> labels;
   for (size_t t = 0; t < tracks.size(); ++t) {
     if (!errors[t].empty()) {
@@ -214,7 +219,9 @@ void FitSequence(const RunFitOptions& options, const std::string& folder, const 
     }
   }
   WriteSequenceLabels(folder, std::move(labels), &result);
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const auto end = std::chrono::steady_clock::now();
+  result.seconds_output = std::chrono::duration<double>(end - output_start).count();
+  result.seconds = std::chrono::duration<double>(end - start).count();
 }
 
 // The detections and ego poses of a sequence's frames (in the options' frame
@@ -430,7 +437,11 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   RunFitSummary summary;
   // The options the sequences are linked and fitted with (the detector's
   // sigmas calibrated when asked); `options` is what config.json records.
+  const auto calibration_start = std::chrono::steady_clock::now();
   RunFitOptions effective = CalibratedOptions(options, &summary);
+  if (summary.detector_model_used && options.detector_model_path.empty())
+    summary.seconds_calibration =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - calibration_start).count();
   tbb::task_arena arena(options.num_threads > 0 ? options.num_threads : tbb::task_arena::automatic);
   std::unique_ptr<ShapeModel> model;
   std::unique_ptr<TrackFitter> fitter;
@@ -440,7 +451,10 @@ RunFitSummary RunFit(const RunFitOptions& options) {
     const bool detection_terms = options.fit.detection_size_sigma > 0 || options.fit.detection_position;
     if (summary.detector_model_used && detection_terms && !HasGivenBoxBias(options.fit)) {
       if (options.detector_model_path.empty() && options.calibration.estimate_box_convention) {
+        const auto box_start = std::chrono::steady_clock::now();
         EstimateRunBoxConvention(effective, *model, &arena, &summary.detector_model);
+        summary.seconds_calibration +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - box_start).count();
         summary.calibration_report +=
             "; " + BoxConventionReport(summary.detector_model, options.calibration.box.apply_along_bias);
         for (const std::string& note : summary.detector_model.notes)

@@ -94,7 +94,9 @@ struct SequenceFitResult {
   int num_tracks = 0;
   int num_fitted = 0;
   std::vector<std::string> track_failures;  // "track <id>: message"
-  double seconds = 0.0;
+  double seconds = 0.0;         // the whole sequence: input.seconds_{frames,tracking} + the two below
+  double seconds_fit = 0.0;     // the tracks' fits
+  double seconds_output = 0.0;  // labels, meshes and records of the fitted tracks
 };
 
 struct RunFitSummary {
@@ -114,6 +116,7 @@ struct RunFitSummary {
   bool detector_model_used = false;
   DetectorNoiseModel detector_model;
   std::string calibration_report;  // CalibrationResult::BriefReport, or where the model was read
+  double seconds_calibration = 0.0;  // self-calibration (detector noise and box convention), before the sequences
   double seconds = 0.0;
   std::string BriefReport() const;
 };
