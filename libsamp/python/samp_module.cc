@@ -199,6 +199,10 @@ py::dict SequenceResultDict(const SequenceFitResult& r) {
   d["input"] = r.input.BriefReport();
   d["tracker"] = r.ok ? r.input.tracking.BriefReport() : std::string();
   d["seconds"] = r.seconds;
+  d["seconds_frames"] = r.input.seconds_frames;
+  d["seconds_tracking"] = r.input.seconds_tracking;
+  d["seconds_fit"] = r.seconds_fit;
+  d["seconds_output"] = r.seconds_output;
   return d;
 }
 
@@ -212,6 +216,7 @@ py::dict SummaryDict(const RunFitSummary& s) {
   d["num_tracks_failed"] = s.num_tracks_failed;
   d["failure"] = s.failure;
   d["replaced_previous_output"] = s.replaced_previous_output;
+  d["seconds_calibration"] = s.seconds_calibration;
   d["seconds"] = s.seconds;
   d["report"] = s.BriefReport();
   return d;

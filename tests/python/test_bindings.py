@@ -161,6 +161,11 @@ def test_fit_sequence_on_the_real_kitti_frame(model):
     assert 8.0 < np.linalg.norm(track.position_world[0]) < 20.0
     assert result.sequences[0]["ok"] and result.sequences[0]["tracking"]["detections"] == 1
     assert result.summary["num_tracks_fitted"] == 1
+    # The sequence's stages: each took time, and together no more than the sequence.
+    seq_summary = result.summary["sequences"][0]
+    stages = [seq_summary["seconds_" + s] for s in ("frames", "tracking", "fit", "output")]
+    assert all(t >= 0.0 for t in stages) and seq_summary["seconds_fit"] > 0.0
+    assert sum(stages) <= seq_summary["seconds"] + 1e-6
     vertices, faces = result.read_mesh(track)
     assert len(faces) > 100
     assert "label_02/000046.txt" in result.files()

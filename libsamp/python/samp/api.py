@@ -157,7 +157,9 @@ class FitResult:
     tracks: list of Track; sequences: per sequence dicts of tracks.json
     (directory, name, ok, error, input, input_messages, tracking = the tracker
     summary, failed_tracks); summary: RunFit's summary (dict: sequences,
-    num_tracks_fitted, num_tracks_failed, failure, report, seconds); config:
+    num_tracks_fitted, num_tracks_failed, failure, report, seconds,
+    seconds_calibration; each sequence also the wall time of its stages,
+    seconds_frames, seconds_tracking, seconds_fit, seconds_output); config:
     the effective options (config.json); failure: why the run failed as `samp
     fit` would (it then exits 1), "" otherwise.
 
