@@ -94,7 +94,7 @@ struct SequenceFitResult {
   int num_tracks = 0;
   int num_fitted = 0;
   std::vector<std::string> track_failures;  // "track <id>: message"
-  double seconds = 0.0;         // the whole sequence: input.seconds_{frames,tracking} + the two below
+  double seconds = 0.0;         // the whole sequence: input.seconds_{frames,tracking}, the two below, the rest
   double seconds_fit = 0.0;     // the tracks' fits
   double seconds_output = 0.0;  // labels, meshes and records of the fitted tracks
 };
