@@ -10,7 +10,6 @@
 #include <filesystem>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -18,6 +17,7 @@
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/json_text.h"
 #include "libsamp/core/log.h"
+#include "libsamp/core/object_pool.h"
 #include "libsamp/core/progress.h"
 #include "libsamp/core/util.h"
 #include "libsamp/model/pca_option_table.h"
@@ -221,47 +221,12 @@ std::vector<TrainJob> ListTrainJobs(const TrainOptions& options) {
 namespace {
 
 // Scan results kept between models so that their images (~128 MB each at the
-// default scan) are reused, not allocated anew per model: a fresh page costs
-// the kernel a fault and a zeroing, and that was 40 % of a model's time
-// (docs/benchmarks.md, "samp.batch"). One result per model in flight: a lease
-// takes one (or a new one) and gives it back at its end. Not thread_local: the
-// SDF's nested TBB loops may run another model's job on the same thread while
-// one waits. The pool lives until the process ends; it holds as many results
-// as models ever ran at once (num_threads of samp train, 1 per Dask task thread).
-class ScanBuffers {
- public:
-  class Lease {
-   public:
-    explicit Lease(ScanBuffers* pool) : pool_(pool), scan_(pool->Take()) {}
-    ~Lease() { pool_->Give(std::move(scan_)); }
-    Lease(const Lease&) = delete;
-    Lease& operator=(const Lease&) = delete;
-    ScanResult* get() const { return scan_.get(); }
-
-   private:
-    ScanBuffers* pool_;
-    std::unique_ptr<ScanResult> scan_;
-  };
-
- private:
-  std::unique_ptr<ScanResult> Take() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (free_.empty()) return std::make_unique<ScanResult>();
-    std::unique_ptr<ScanResult> scan = std::move(free_.back());
-    free_.pop_back();
-    return scan;
-  }
-  void Give(std::unique_ptr<ScanResult> scan) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    free_.push_back(std::move(scan));
-  }
-
-  std::mutex mutex_;
-  std::vector<std::unique_ptr<ScanResult>> free_;
-};
-
-ScanBuffers& SharedScanBuffers() {
-  static ScanBuffers pool;
+// default scan) are reused, not allocated anew per model (core/object_pool.h;
+// the fresh pages were 40 % of a model's time, docs/benchmarks.md,
+// "samp.batch"). The pool holds as many results as models ever ran at once
+// (num_threads of samp train, 1 per Dask task thread).
+ObjectPool<ScanResult>& SharedScanBuffers() {
+  static ObjectPool<ScanResult> pool;
   return pool;
 }
 
@@ -285,7 +250,7 @@ TrainedShape TrainJobSdf(const TrainJob& job, const TrainOptions& options, std::
     }
     shape.scale = canonical.scale;
     shape.size = canonical.size;
-    const ScanBuffers::Lease scan(&SharedScanBuffers());
+    const ObjectPool<ScanResult>::Lease scan(&SharedScanBuffers());
     Sdf sdf = ScanToSdf(canonical.mesh, options.scan, options.grid, options.sdf, scan.get());
     shape.inside_fraction = sdf.summary.inside_fraction;
     SAMP_CHECK(sdf.summary.sign_ok)

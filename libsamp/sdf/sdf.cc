@@ -30,6 +30,7 @@
 #include <sstream>
 
 #include "libsamp/core/error.h"
+#include "libsamp/core/object_pool.h"
 #include "libsamp/sdf/sdf_option_table.h"
 #include "libsamp/sdf/sdf_stages.h"
 
@@ -95,12 +96,14 @@ using sdf_internal::CarveSlab;
 using sdf_internal::CarveView;
 using sdf_internal::ClosingOutside;
 using sdf_internal::DistanceField;
+using sdf_internal::FloodBuffers;
 using sdf_internal::InsideComponents;
 using sdf_internal::kFar;
 using sdf_internal::MakeCarveViews;
 using sdf_internal::NearDistance;
 using sdf_internal::PropagateDistances;
 using sdf_internal::SeedBand;
+using sdf_internal::SlabVoxels;
 using sdf_internal::Triangle;
 using sdf_internal::Vec3;
 
@@ -115,11 +118,33 @@ void CheckSdfInput(const Mesh& mesh, const ScanResult& scan, const GridSpec& gri
       << " triangle flags, the mesh has " << mesh.triangles.size() << " triangles";
 }
 
-// The triangles the scans saw, with their planes; *triangle_index maps mesh
-// triangle -> seen index or -1. Throws samp::Error for a vertex index out of
-// range or when no triangle was seen.
-std::vector<Triangle> SeenTriangles(const Mesh& mesh, const ScanResult& scan, std::vector<int32_t>* triangle_index) {
+// The buffers of one ComputeSdf call, kept for the next (a pool below,
+// core/object_pool.h): on the benchmark's grid they are ~25 MB, whose fresh
+// pages cost a quarter of the call (docs/benchmarks.md, "SDF").
+struct SdfWorkspace {
+  std::vector<int32_t> triangle_index;
   std::vector<Triangle> triangles;
+  std::vector<std::vector<int32_t>> slab_triangles;
+  DistanceField field;
+  std::vector<float> distance;
+  std::vector<CarveView> views;
+  std::vector<SlabVoxels> slabs;
+  std::vector<uint8_t> outside, closed_outside;
+  FloodBuffers flood;
+};
+
+ObjectPool<SdfWorkspace>& SharedWorkspaces() {
+  static ObjectPool<SdfWorkspace> pool;
+  return pool;
+}
+
+// The triangles the scans saw, with their planes, in *triangles;
+// *triangle_index maps mesh triangle -> seen index or -1. Throws samp::Error
+// for a vertex index out of range or when no triangle was seen.
+void SeenTriangles(const Mesh& mesh, const ScanResult& scan, std::vector<int32_t>* triangle_index,
+                   std::vector<Triangle>* triangles_out) {
+  std::vector<Triangle>& triangles = *triangles_out;
+  triangles.clear();
   triangles.reserve(size_t(std::count(scan.triangle_seen.begin(), scan.triangle_seen.end(), uint8_t(1))) +
                     1);
   triangle_index->assign(mesh.triangles.size(), -1);
@@ -142,7 +167,6 @@ std::vector<Triangle> SeenTriangles(const Mesh& mesh, const ScanResult& scan, st
     triangles.push_back(tri);
   }
   SAMP_CHECK(!triangles.empty()) << "ComputeSdf: the scans saw no triangle of the mesh";
-  return triangles;
 }
 
 // Slabs of z-slices, the unit of parallel work: `size` slices each (8 when
@@ -191,11 +215,13 @@ class LapTimer {
 };
 
 // The seen triangles (indices into `triangles`) within `band` of the slices
-// of each slab.
-std::vector<std::vector<int32_t>> TrianglesOfSlabs(const GridSpec& grid, const std::vector<Triangle>& triangles,
-                                                   float band, const Slabs& slabs) {
+// of each slab, in *slab_triangles (its buffers reused).
+void TrianglesOfSlabs(const GridSpec& grid, const std::vector<Triangle>& triangles, float band, const Slabs& slabs,
+                      std::vector<std::vector<int32_t>>* slab_triangles_out) {
   const int nz = grid.dims.z();
-  std::vector<std::vector<int32_t>> slab_triangles(static_cast<size_t>(slabs.count));
+  std::vector<std::vector<int32_t>>& slab_triangles = *slab_triangles_out;
+  slab_triangles.resize(static_cast<size_t>(slabs.count));
+  for (std::vector<int32_t>& list : slab_triangles) list.clear();
   const float inv_h = float(1.0 / grid.voxel_size);
   const float oz = float(grid.origin.z());
   const float band_voxels = band * inv_h;
@@ -208,55 +234,57 @@ std::vector<std::vector<int32_t>> TrianglesOfSlabs(const GridSpec& grid, const s
     if (k0 > k1) continue;
     for (int s = k0 / slabs.size; s <= k1 / slabs.size; ++s) slab_triangles[size_t(s)].push_back(int32_t(t));
   }
-  return slab_triangles;
 }
 
 // 1a. Exact narrow band (one voxel): the exact distance and closest point
-// of every voxel within a voxel of the seen triangles; kFar elsewhere.
-DistanceField NarrowBand(const GridSpec& grid, const std::vector<Triangle>& triangles, const Slabs& slabs) {
+// of every voxel within a voxel of the seen triangles; kFar elsewhere
+// (workspace->field).
+void NarrowBand(const GridSpec& grid, const Slabs& slabs, SdfWorkspace* workspace) {
   const size_t num_voxels = size_t(grid.NumVoxels());
   const float band = float(grid.voxel_size);
-  DistanceField field;
+  DistanceField& field = workspace->field;
   field.squared.assign(num_voxels, std::numeric_limits<float>::infinity());
   field.x.assign(num_voxels, kFar);
   field.y.assign(num_voxels, kFar);
   field.z.assign(num_voxels, kFar);
-  const std::vector<std::vector<int32_t>> slab_triangles = TrianglesOfSlabs(grid, triangles, band, slabs);
+  const std::vector<Triangle>& triangles = workspace->triangles;
+  TrianglesOfSlabs(grid, triangles, band, slabs, &workspace->slab_triangles);
+  const std::vector<std::vector<int32_t>>& slab_triangles = workspace->slab_triangles;
   slabs.ForEach([&](int k_begin, int k_end) {
     SeedBand(grid, triangles, slab_triangles[size_t(k_begin / slabs.size)], band, k_begin, k_end, &field);
   });
-  return field;
 }
 
-// 2. Sign by visibility carving: outside[v] = 1 for the voxels some view
-// sees in front of the surface, or that no view sees.
-std::vector<uint8_t> CarveOutside(const GridSpec& grid, const ScanResult& scan, const std::vector<Triangle>& triangles,
-                                  const std::vector<int32_t>& triangle_index, const std::vector<float>& distance,
-                                  const SdfOptions& options, const Slabs& slabs) {
-  const std::vector<CarveView> views = MakeCarveViews(scan);
-  const float near_distance = NearDistance(grid, views);
-  std::vector<uint8_t> outside(size_t(grid.NumVoxels()), 0);
+// 2. Sign by visibility carving: workspace->outside[v] = 1 for the voxels
+// some view sees in front of the surface, or that no view sees.
+void CarveOutside(const GridSpec& grid, const ScanResult& scan, const SdfOptions& options, const Slabs& slabs,
+                  SdfWorkspace* workspace) {
+  MakeCarveViews(scan, &workspace->views);
+  const float near_distance = NearDistance(grid, workspace->views);
+  workspace->outside.assign(size_t(grid.NumVoxels()), 0);
+  workspace->slabs.resize(size_t(slabs.count));
   slabs.ForEach([&](int k_begin, int k_end) {
-    CarveSlab(grid, views, triangles, triangle_index, distance, near_distance, options, k_begin,
-              k_end, &outside);
+    CarveSlab(grid, workspace->views, workspace->triangles, workspace->triangle_index, workspace->distance,
+              near_distance, options, k_begin, k_end, &workspace->slabs[size_t(k_begin / slabs.size)],
+              &workspace->outside);
   });
-  return outside;
 }
 
 // 3. Closing, and the sign: inside where either says inside (*outside
 // updated). Sets the carving's and the closing's inside fractions in
 // *summary; returns the number of voxels where the two disagree.
-int64_t CloseOutside(const GridSpec& grid, const std::vector<float>& distance, const SdfOptions& options,
-                     std::vector<uint8_t>* outside_in_out, SdfSummary* summary) {
-  std::vector<uint8_t>& outside = *outside_in_out;
+int64_t CloseOutside(const GridSpec& grid, const SdfOptions& options, SdfWorkspace* workspace,
+                     SdfSummary* summary) {
+  const std::vector<float>& distance = workspace->distance;
+  std::vector<uint8_t>& outside = workspace->outside;
   const size_t num_voxels = outside.size();
   int64_t carving_inside = 0;
   for (size_t v = 0; v < num_voxels; ++v) carving_inside += int64_t(!outside[v]);
-  std::vector<uint8_t> closed_outside;
+  std::vector<uint8_t>& closed_outside = workspace->closed_outside;
   // kCarving: the sign before issue 14, no closing (closing_inside_fraction stays 0).
   const bool closing = options.sign == SdfOptions::Sign::kCarvingAndClosing &&
                        ClosingOutside(grid, distance, outside, float(options.closing_radius_voxels),
-                                      &closed_outside);
+                                      &workspace->flood, &closed_outside);
   int64_t closing_inside = 0, disagree = 0;
   if (closing) {
     for (size_t v = 0; v < num_voxels; ++v) {
@@ -292,30 +320,31 @@ Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
                const SdfOptions& options, bool parallel) {
   const auto start = std::chrono::steady_clock::now();
   CheckSdfInput(mesh, scan, grid, options);
-  std::vector<int32_t> triangle_index;
-  const std::vector<Triangle> triangles = SeenTriangles(mesh, scan, &triangle_index);
+  const ObjectPool<SdfWorkspace>::Lease workspace(&SharedWorkspaces());
+  SeenTriangles(mesh, scan, &workspace->triangle_index, &workspace->triangles);
   const size_t num_voxels = size_t(grid.NumVoxels());
   const Slabs slabs = MakeSlabs(grid.dims.z(), parallel);
   LapTimer lap(start);
   Sdf sdf;
   sdf.summary.setup_seconds = lap();
 
-  DistanceField field = NarrowBand(grid, triangles, slabs);
+  NarrowBand(grid, slabs, workspace.get());
   sdf.summary.band_seconds = lap();
-  const std::vector<float> distance = PropagateDistances(grid, &field);
+  PropagateDistances(grid, &workspace->field, &workspace->distance);
   sdf.summary.propagation_seconds = lap();
 
-  std::vector<uint8_t> outside = CarveOutside(grid, scan, triangles, triangle_index, distance, options, slabs);
+  CarveOutside(grid, scan, options, slabs, workspace.get());
   sdf.summary.carving_seconds = lap();
 
-  const int64_t disagree = CloseOutside(grid, distance, options, &outside, &sdf.summary);
+  const int64_t disagree = CloseOutside(grid, options, workspace.get(), &sdf.summary);
   sdf.grid = grid;
-  const int64_t inside = SignedValues(distance, outside, float(options.truncation), &sdf.values);
+  const std::vector<uint8_t>& outside = workspace->outside;
+  const int64_t inside = SignedValues(workspace->distance, outside, float(options.truncation), &sdf.values);
   sdf.summary.sign_disagreement = inside > 0 ? double(disagree) / double(inside) : 0.0;
-  InsideComponents(grid, outside, &sdf.summary.num_inside_components,
+  InsideComponents(grid, outside, &workspace->flood, &sdf.summary.num_inside_components,
                    &sdf.summary.largest_component_share);
   sdf.summary.closing_seconds = lap();
-  sdf.summary.num_seen_triangles = int(triangles.size());
+  sdf.summary.num_seen_triangles = int(workspace->triangles.size());
   sdf.summary.inside_fraction = double(inside) / double(num_voxels);
   sdf.summary.sign_ok = sdf.summary.inside_fraction >= options.min_inside_fraction;
   sdf.summary.seconds =

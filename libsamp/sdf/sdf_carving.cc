@@ -92,26 +92,6 @@ void BuildViewTables(CarveView* view) {
   }
 }
 
-// A voxel not carved yet.
-struct Active {
-  Vec3 position;
-  float distance;
-  int32_t index;
-  uint8_t in_frustum;  // some view had it in its image
-  uint8_t cell;        // its 2^3 cell within its block (voxels of a cell are contiguous)
-};
-
-// A set of voxels (a block, a cell, or the near voxels of a block): a
-// segment [begin, begin + count) of the active list.
-struct Block {
-  int begin = 0, count = 0;
-  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // bounding box of the active voxel centres
-  float min_distance = 0.f;  // smallest distance of the active voxels
-  bool seen = false;         // some view had all of them in its image
-  bool per_voxel = false;    // voxels near the surface: always tested one by one
-  bool stale = true;         // (cells) lo, hi, min_distance to be recomputed
-};
-
 enum class BlockDecision { kUndecided, kOutOfView, kNoneCarved, kAllCarved };
 
 // Decides a set of far voxels for one view when the per-voxel rule must give
@@ -402,16 +382,6 @@ void Bound(const Active* begin, const Active* end, Block* block) {
   }
 }
 
-// The voxels of a slab not carved yet: blocks of kBlock^3 voxels in raster
-// order, their voxels ordered by cell; the voxels of each block that may be
-// near the surface for some view form a block of their own, tested voxel by
-// voxel.
-struct SlabVoxels {
-  std::vector<Active> active;
-  std::vector<Block> blocks;
-  std::vector<Block> cells;  // 8 per block (the 2^3 cells of block b at 8 * b)
-};
-
 // The voxels of the block at (bi, bj, bk), cell by cell, appended to *far,
 // or to *near when within near_distance of the surface; outside[v] = 1 for
 // each until found uncarved.
@@ -463,25 +433,32 @@ void AddNearBlock(const std::vector<Active>& near, SlabVoxels* slab) {
   slab->cells.resize(slab->cells.size() + 8);  // unused; keeps cells[8 * b] for block b
 }
 
-// The voxels with k in [k_begin, k_end) in blocks; outside[v] = 1 for each.
-SlabVoxels GatherSlab(const GridSpec& grid, const std::vector<float>& distance, float near_distance, int k_begin,
-                      int k_end, std::vector<uint8_t>* outside) {
+// The voxels with k in [k_begin, k_end) in blocks, in *slab (emptied first,
+// its buffers reused); outside[v] = 1 for each.
+void GatherSlab(const GridSpec& grid, const std::vector<float>& distance, float near_distance, int k_begin,
+                int k_end, SlabVoxels* slab, std::vector<uint8_t>* outside) {
   const int nx = grid.dims.x(), ny = grid.dims.y();
-  SlabVoxels slab;
-  slab.active.reserve(size_t(nx) * size_t(ny) * size_t(std::max(0, k_end - k_begin)));
-  std::vector<Active> near;
+  const size_t num_blocks = size_t((nx + kBlock - 1) / kBlock) * size_t((ny + kBlock - 1) / kBlock) *
+                            size_t((std::max(0, k_end - k_begin) + kBlock - 1) / kBlock);
+  slab->active.clear();
+  slab->blocks.clear();
+  slab->cells.clear();
+  // At most a block and a near block per block of the grid, 8 cells each.
+  slab->active.reserve(size_t(nx) * size_t(ny) * size_t(std::max(0, k_end - k_begin)));
+  slab->blocks.reserve(2 * num_blocks);
+  slab->cells.reserve(16 * num_blocks);
+  std::vector<Active>& near = slab->near;
   for (int bk = k_begin; bk < k_end; bk += kBlock) {
     for (int bj = 0; bj < ny; bj += kBlock) {
       for (int bi = 0; bi < nx; bi += kBlock) {
-        const int begin = int(slab.active.size());
+        const int begin = int(slab->active.size());
         near.clear();
-        GatherBlock(grid, distance, near_distance, bi, bj, bk, k_end, &slab.active, &near, outside);
-        if (int(slab.active.size()) > begin) AddBlock(begin, &slab);
-        if (!near.empty()) AddNearBlock(near, &slab);
+        GatherBlock(grid, distance, near_distance, bi, bj, bk, k_end, &slab->active, &near, outside);
+        if (int(slab->active.size()) > begin) AddBlock(begin, slab);
+        if (!near.empty()) AddNearBlock(near, slab);
       }
     }
   }
-  return slab;
 }
 
 // Decides the 2^3 cells of an undecided block for one view (DecideBlock):
@@ -585,16 +562,15 @@ void MarkUncarved(const SlabVoxels& slab, std::vector<uint8_t>* outside) {
 
 }  // namespace
 
-std::vector<CarveView> MakeCarveViews(const ScanResult& scan) {
-  std::vector<CarveView> views;
-  views.reserve(scan.views.size());
+void MakeCarveViews(const ScanResult& scan, std::vector<CarveView>* views) {
+  views->resize(scan.views.size());
   for (size_t index = 0; index < scan.views.size(); ++index) {
     const ScanView& view = scan.views[index];
     const int64_t pixels = int64_t(view.camera.width) * view.camera.height;
     SAMP_CHECK(int64_t(view.depth.size()) == pixels && int64_t(view.triangle.size()) == pixels)
         << "ComputeSdf: scan view " << index << " has " << view.depth.size() << " depths and "
         << view.triangle.size() << " triangle ids for " << pixels << " pixels";
-    CarveView carve;
+    CarveView& carve = (*views)[index];
     carve.rotation = view.camera_from_object.linear().cast<float>();
     carve.translation = view.camera_from_object.translation().cast<float>();
     carve.camera_center = view.camera_from_object.inverse().translation().cast<float>();
@@ -610,9 +586,7 @@ std::vector<CarveView> MakeCarveViews(const ScanResult& scan) {
     carve.depth = view.depth.data();
     carve.triangle = view.triangle.data();
     BuildViewTables(&carve);
-    views.push_back(std::move(carve));
   }
-  return views;
 }
 
 float NearDistance(const GridSpec& grid, const std::vector<CarveView>& views) {
@@ -633,10 +607,11 @@ float NearDistance(const GridSpec& grid, const std::vector<CarveView>& views) {
 void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
                const std::vector<Triangle>& triangles, const std::vector<int32_t>& triangle_index,
                const std::vector<float>& distance, float near_distance, const SdfOptions& options,
-               int k_begin, int k_end, std::vector<uint8_t>* outside) {
+               int k_begin, int k_end, SlabVoxels* slab_out, std::vector<uint8_t>* outside) {
   const float h = float(grid.voxel_size);
   const float margin = float(options.carve_margin);
-  SlabVoxels slab = GatherSlab(grid, distance, near_distance, k_begin, k_end, outside);
+  SlabVoxels& slab = *slab_out;
+  GatherSlab(grid, distance, near_distance, k_begin, k_end, &slab, outside);
   // View by view (its depth image stays in cache): each view first tries to
   // decide each block as a whole, then each 2^3 cell of an undecided block
   // (DecideBlock); the rest is tested voxel by voxel.

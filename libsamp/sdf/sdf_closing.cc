@@ -25,15 +25,16 @@ void ForEachFaceNeighbour(const GridSpec& grid, int64_t v, Visit&& visit) {
 }
 
 // O: the voxels farther than tau from the surface that a 6-connected flood
-// fill reaches from the border voxels the carving calls outside; (*fill_out)[v] = 1
-// for each. False when no border voxel seeds the fill.
+// fill reaches from the border voxels the carving calls outside; mark[v] = 1
+// for each (buffers->mark). False when no border voxel seeds the fill.
 bool FillFromBorder(const GridSpec& grid, const std::vector<float>& distance, const std::vector<uint8_t>& carved,
-                    float tau, std::vector<uint8_t>* fill_out) {
+                    float tau, FloodBuffers* buffers) {
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   const size_t n = distance.size();
-  std::vector<uint8_t>& fill = *fill_out;
+  std::vector<uint8_t>& fill = buffers->mark;
   fill.assign(n, 0);
-  std::vector<int32_t> queue;
+  std::vector<int32_t>& queue = buffers->queue;
+  queue.clear();
   queue.reserve(n / 4);
   auto seed = [&](int i, int j, int k) {
     const int64_t v = grid.Index(i, j, k);
@@ -130,13 +131,13 @@ class BallSearch {
 }  // namespace
 
 bool ClosingOutside(const GridSpec& grid, const std::vector<float>& distance,
-                    const std::vector<uint8_t>& carved,
-                    float radius_voxels, std::vector<uint8_t>* closed_outside) {
+                    const std::vector<uint8_t>& carved, float radius_voxels,
+                    FloodBuffers* buffers, std::vector<uint8_t>* closed_outside) {
   const int nx = grid.dims.x(), ny = grid.dims.y(), nz = grid.dims.z();
   const float h = float(grid.voxel_size);
   const float tau = radius_voxels * h;
-  std::vector<uint8_t> fill;
-  if (!FillFromBorder(grid, distance, carved, tau, &fill)) return false;
+  if (!FillFromBorder(grid, distance, carved, tau, buffers)) return false;
+  const std::vector<uint8_t>& fill = buffers->mark;
   closed_outside->assign(distance.size(), 0);
   const BallSearch balls(grid, distance, fill, radius_voxels);
   const float on_surface = 1e-3f * h;
@@ -161,10 +162,11 @@ bool ClosingOutside(const GridSpec& grid, const std::vector<float>& distance,
   return true;
 }
 
-void InsideComponents(const GridSpec& grid, const std::vector<uint8_t>& outside,
+void InsideComponents(const GridSpec& grid, const std::vector<uint8_t>& outside, FloodBuffers* buffers,
                       int* num_components, double* largest_share) {
-  std::vector<uint8_t> visited(outside.size(), 0);
-  std::vector<int32_t> stack;
+  std::vector<uint8_t>& visited = buffers->mark;
+  visited.assign(outside.size(), 0);
+  std::vector<int32_t>& stack = buffers->queue;
   int64_t total = 0, largest = 0;
   *num_components = 0;
   for (size_t start = 0; start < outside.size(); ++start) {

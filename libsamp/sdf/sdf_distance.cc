@@ -292,16 +292,14 @@ void SeedBand(const GridSpec& grid, const std::vector<Triangle>& all,
   }
 }
 
-std::vector<float> PropagateDistances(const GridSpec& grid, DistanceField* field) {
+void PropagateDistances(const GridSpec& grid, DistanceField* field, std::vector<float>* distance) {
   PropagatePass(grid, +1, field);
   PropagatePass(grid, -1, field);
   PropagatePass(grid, +1, field);
   PropagatePass(grid, -1, field);
   const size_t num_voxels = size_t(grid.NumVoxels());
-  std::vector<float> distance(num_voxels);
-  for (size_t v = 0; v < num_voxels; ++v) distance[v] = std::sqrt(field->squared[v]);
-  *field = DistanceField();
-  return distance;
+  distance->resize(num_voxels);
+  for (size_t v = 0; v < num_voxels; ++v) (*distance)[v] = std::sqrt(field->squared[v]);
 }
 
 }  // namespace sdf_internal

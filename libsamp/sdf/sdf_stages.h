@@ -46,8 +46,8 @@ void SeedBand(const GridSpec& grid, const std::vector<Triangle>& all,
 
 // The closest points of the band propagated to the whole grid (two forward
 // and two backward raster passes, serial: each pass depends on the previous
-// voxels), then the distances; releases *field.
-std::vector<float> PropagateDistances(const GridSpec& grid, DistanceField* field);
+// voxels), then the distances (*distance resized to the grid).
+void PropagateDistances(const GridSpec& grid, DistanceField* field, std::vector<float>* distance);
 
 // ---- Carving (sdf_carving.cc) ----
 
@@ -71,24 +71,64 @@ struct CarveView {
   std::vector<float> cell_min, cell_max;
 };
 
-// The views of the scan, with their tables; they point into `scan`'s images,
-// so `scan` must outlive them. Throws samp::Error for a view whose depth or
-// triangle image does not match its camera.
-std::vector<CarveView> MakeCarveViews(const ScanResult& scan);
+// The views of the scan, with their tables, in *views (its tables' buffers
+// reused); they point into `scan`'s images, so `scan` must outlive them.
+// Throws samp::Error for a view whose depth or triangle image does not match
+// its camera.
+void MakeCarveViews(const ScanResult& scan, std::vector<CarveView>* views);
 
 // Voxels within this distance of the surface may be "near" (docs/sdf.md) for
 // some view: the largest lateral_per_depth times the largest camera depth
 // of a grid corner (an upper bound of every voxel's depth).
 float NearDistance(const GridSpec& grid, const std::vector<CarveView>& views);
 
+// A voxel not carved yet.
+struct Active {
+  Vec3 position;
+  float distance;
+  int32_t index;
+  uint8_t in_frustum;  // some view had it in its image
+  uint8_t cell;        // its 2^3 cell within its block (voxels of a cell are contiguous)
+};
+
+// A set of voxels (a block, a cell, or the near voxels of a block): a
+// segment [begin, begin + count) of the active list.
+struct Block {
+  int begin = 0, count = 0;
+  Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // bounding box of the active voxel centres
+  float min_distance = 0.f;  // smallest distance of the active voxels
+  bool seen = false;         // some view had all of them in its image
+  bool per_voxel = false;    // voxels near the surface: always tested one by one
+  bool stale = true;         // (cells) lo, hi, min_distance to be recomputed
+};
+
+// The voxels of a slab not carved yet: blocks of kBlock^3 voxels in raster
+// order, their voxels ordered by cell; the voxels of each block that may be
+// near the surface for some view form a block of their own, tested voxel by
+// voxel.
+struct SlabVoxels {
+  std::vector<Active> active;
+  std::vector<Block> blocks;
+  std::vector<Block> cells;  // 8 per block (the 2^3 cells of block b at 8 * b)
+  std::vector<Active> near;  // scratch: the near voxels of one block
+};
+
 // Carves the voxels with k in [k_begin, k_end): sets outside[v] = 1 for the
 // voxels some view sees in front of the surface, or that no view sees.
+// *slab holds the working set (its buffers reused).
 void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
                const std::vector<Triangle>& triangles, const std::vector<int32_t>& triangle_index,
                const std::vector<float>& distance, float near_distance, const SdfOptions& options,
-               int k_begin, int k_end, std::vector<uint8_t>* outside);
+               int k_begin, int k_end, SlabVoxels* slab, std::vector<uint8_t>* outside);
 
 // ---- Closing (sdf_closing.cc) ----
+
+// The working set of a flood fill over the grid: a mark per voxel and the
+// voxels to visit (buffers reused between calls).
+struct FloodBuffers {
+  std::vector<uint8_t> mark;
+  std::vector<int32_t> queue;
+};
 
 // The closing of the seen surface with radius tau = radius_voxels * h
 // (docs/sdf.md, "Sign"): O = the voxels farther than tau from the surface
@@ -104,12 +144,12 @@ void CarveSlab(const GridSpec& grid, const std::vector<CarveView>& views,
 // balls of the O voxels beyond them). Returns false, leaving *closed_outside
 // empty, when no border voxel can seed the fill.
 bool ClosingOutside(const GridSpec& grid, const std::vector<float>& distance,
-                    const std::vector<uint8_t>& carved,
-                    float radius_voxels, std::vector<uint8_t>* closed_outside);
+                    const std::vector<uint8_t>& carved, float radius_voxels,
+                    FloodBuffers* buffers, std::vector<uint8_t>* closed_outside);
 
 // Number of 6-connected components of the inside voxels (outside[v] == 0)
 // and the share of the inside voxels in the largest one (0 when none).
-void InsideComponents(const GridSpec& grid, const std::vector<uint8_t>& outside,
+void InsideComponents(const GridSpec& grid, const std::vector<uint8_t>& outside, FloodBuffers* buffers,
                       int* num_components, double* largest_share);
 
 }  // namespace sdf_internal

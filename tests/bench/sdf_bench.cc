@@ -6,6 +6,7 @@
 //   sdf_bench [--benchmark_filter=...] [--sdf_timing=0] [--sdf_report=0]
 //             [--sdf_cad_dir=CACHE_DIR/cars] [--sdf_corpus=0] [--sdf_cad_check=0]
 //             [--sdf_sign_check=0]                (runs single-threaded)
+//   sdf_bench --sdf_dump=FILE   (ComputeSdf's values of the test meshes, to compare two builds)
 // The cracked corpus (docs/sdf.md, "Cracked meshes") runs on the procedural
 // bodies and, with --sdf_cad_dir, on every car of the manifest not skipped.
 #include <benchmark/benchmark.h>
@@ -17,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <limits>
 #include <functional>
@@ -108,10 +110,21 @@ const Scene& ClosedScene() {
 void BM_ComputeSdf(benchmark::State& state) {
   const Scene& s = ClosedScene();
   Sdf sdf;
+  // The stages' wall-clock shares (SdfSummary), averaged over the iterations.
+  double band = 0, propagation = 0, carving = 0, closing = 0;
   for (auto _ : state) {
     sdf = ComputeSdf(s.mesh, s.scan, s.grid, SdfOptions(), /*parallel=*/false);
     benchmark::DoNotOptimize(sdf.values.data());
+    band += sdf.summary.band_seconds;
+    propagation += sdf.summary.propagation_seconds;
+    carving += sdf.summary.carving_seconds;
+    closing += sdf.summary.closing_seconds;
   }
+  const double iterations = std::max<double>(1.0, double(state.iterations()));
+  state.counters["band_ms"] = 1e3 * band / iterations;
+  state.counters["propagation_ms"] = 1e3 * propagation / iterations;
+  state.counters["carving_ms"] = 1e3 * carving / iterations;
+  state.counters["closing_ms"] = 1e3 * closing / iterations;
   state.counters["voxels"] = double(s.grid.NumVoxels());
   state.counters["triangles"] = double(s.mesh.triangles.size());
   state.counters["inside_fraction"] = sdf.summary.inside_fraction;
@@ -644,6 +657,34 @@ void RunCrackedCorpus(const std::string& cad_dir) {
               100.0 * worst_carving, 100.0 * worst_closing, closing_ms / std::max(1, runs),
               total_ms / std::max(1, runs), runs);
 }
+// --sdf_dump=FILE: the values of ComputeSdf for the benchmark mesh and the
+// sign check's meshes, serial and in slabs, with the carving alone and with
+// the closing, as raw floats: `cmp` two builds' files to show that a change
+// kept every value.
+void DumpValues(const std::string& path) {
+  const Scene& closed = ClosedScene();
+  const std::vector<Mesh> meshes = {closed.mesh,          MakeCadLikeMesh(), MakeOpenBox(), MakeBoxWithHole(0.8),
+                                    MakeBoxWithHole(0.3), MakeOpenHull(),    MakeSlitHull()};
+  std::FILE* file = std::fopen(path.c_str(), "wb");
+  if (file == nullptr) {
+    std::fprintf(stderr, "sdf_bench: cannot write %s\n", path.c_str());
+    std::exit(1);
+  }
+  for (const Mesh& mesh : meshes) {
+    const ScanResult scan = ScanMesh(mesh, ScanOptions());
+    for (const bool parallel : {false, true}) {
+      for (const SdfOptions::Sign sign : {SdfOptions::Sign::kCarving, SdfOptions::Sign::kCarvingAndClosing}) {
+        SdfOptions options;
+        options.sign = sign;
+        const Sdf sdf = ComputeSdf(mesh, scan, closed.grid, options, parallel);
+        std::fwrite(sdf.values.data(), sizeof(float), sdf.values.size(), file);
+      }
+    }
+  }
+  std::fclose(file);
+  std::printf("wrote %zu meshes x 4 configurations of %lld values to %s\n", meshes.size(),
+              (long long)closed.grid.NumVoxels(), path.c_str());
+}
 }  // namespace
 }  // namespace samp
 
@@ -655,6 +696,7 @@ int main(int argc, char** argv) {
   //   --sdf_report=0      skip everything after the benchmarks (e.g. for profiling)
   //   --sdf_timing=0      skip the timing summary (OpenVDB's whole-grid SDF takes ~1 min)
   //   --sdf_cad_dir=DIR   also compare signs on the real CAD cars in DIR
+  //   --sdf_dump=FILE     only write ComputeSdf's values of the test meshes (DumpValues)
   bool report = true, timing = true, corpus = true, cad_check = true, sign_check = true;
   std::string cad_dir;
   int kept = 1;
@@ -670,6 +712,9 @@ int main(int argc, char** argv) {
       cad_check = false;
     } else if (arg == "--sdf_sign_check=0") {
       sign_check = false;
+    } else if (arg.rfind("--sdf_dump=", 0) == 0) {
+      samp::DumpValues(arg.substr(std::string("--sdf_dump=").size()));
+      return 0;
     } else if (arg.rfind("--sdf_cad_dir=", 0) == 0) {
       cad_dir = arg.substr(std::string("--sdf_cad_dir=").size());
     } else {

@@ -4,17 +4,20 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 #include <tuple>
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
 #include "libsamp/core/grid_spec.h"
 #include "libsamp/core/mesh.h"
+#include "libsamp/core/object_pool.h"
 #include "libsamp/core/ply_io.h"
 #include "libsamp/core/progress.h"
 #include "tests/testing/small_disk.h"
@@ -536,6 +539,44 @@ TEST(Progress, FormatsDurations) {
   EXPECT_EQ(Progress::FormatDuration(12.34), "12.3s");
   EXPECT_EQ(Progress::FormatDuration(185), "3m05s");
   EXPECT_EQ(Progress::FormatDuration(3720), "1h02m");
+}
+
+TEST(ObjectPool, ReusesObjectsAndGivesConcurrentLeasesTheirOwn) {
+  ObjectPool<std::vector<int>> pool;
+  const std::vector<int>* first = nullptr;
+  {
+    ObjectPool<std::vector<int>>::Lease lease(&pool);
+    first = lease.get();
+    lease->assign(1000, 7);  // buffers a later lease finds again
+    ObjectPool<std::vector<int>>::Lease second(&pool);
+    EXPECT_NE(second.get(), first);  // two leases at once: two objects
+    EXPECT_TRUE(second->empty());
+  }
+  EXPECT_EQ(pool.NumFree(), 2u);
+  {
+    ObjectPool<std::vector<int>>::Lease again(&pool);
+    ObjectPool<std::vector<int>>::Lease other(&pool);
+    ASSERT_TRUE(again.get() == first || other.get() == first);
+    const std::vector<int>& reused = again.get() == first ? *again : *other;
+    EXPECT_EQ(reused.size(), 1000u);
+  }
+  // Many threads: every lease is exclusive while it lasts.
+  std::vector<std::thread> threads;
+  std::atomic<int> clashes{0};
+  for (int t = 0; t < 8; ++t) {
+    threads.emplace_back([&pool, &clashes, t] {
+      for (int round = 0; round < 200; ++round) {
+        ObjectPool<std::vector<int>>::Lease lease(&pool);
+        lease->assign(16, t);
+        std::this_thread::yield();
+        for (const int value : *lease) clashes += int(value != t);
+      }
+    });
+  }
+  for (std::thread& thread : threads) thread.join();
+  EXPECT_EQ(clashes.load(), 0);
+  EXPECT_GE(pool.NumFree(), 2u);
+  EXPECT_LE(pool.NumFree(), 10u);
 }
 
 }  // namespace
