@@ -104,8 +104,8 @@ BlockDecision DecideBlock(const CarveView& view, const Block& block, float margi
   constexpr float kDepthEps = 1e-4f;    // metres
   constexpr float kPixelEps = 1e-2f;    // pixels
   constexpr float kSampleSlack = 3.0f;  // pixels (the coarse sample is within 2)
-  const Vec3 centre = 0.5f * (block.lo + block.hi);
-  const float radius = 0.5f * (block.hi - block.lo).norm() * 1.0001f + 1e-6f;
+  const Vec3& centre = block.centre;
+  const float radius = block.radius;
   const Vec3 pc = view.rotation * centre + view.translation;
   const float zmin = pc.z() - radius - kDepthEps, zmax = pc.z() + radius + kDepthEps;
   if (!(zmin > 1e-3f)) return BlockDecision::kUndecided;
@@ -369,7 +369,8 @@ class VoxelCarver {
 
 constexpr int kBlock = 4;  // voxels per block edge; its cells have 2 voxels per edge
 
-// Bounding box and smallest distance of the voxels [begin, end).
+// Bounding box (with its centre and radius) and smallest distance of the
+// voxels [begin, end).
 void Bound(const Active* begin, const Active* end, Block* block) {
   constexpr float kInfinity = std::numeric_limits<float>::infinity();
   block->lo = Vec3::Constant(kInfinity);
@@ -380,6 +381,8 @@ void Bound(const Active* begin, const Active* end, Block* block) {
     block->hi = block->hi.cwiseMax(voxel->position);
     block->min_distance = std::min(block->min_distance, voxel->distance);
   }
+  block->centre = 0.5f * (block->lo + block->hi);
+  block->radius = 0.5f * (block->hi - block->lo).norm() * 1.0001f + 1e-6f;
 }
 
 // The voxels of the block at (bi, bj, bk), cell by cell, appended to *far,

@@ -96,6 +96,8 @@ struct Active {
 struct Block {
   int begin = 0, count = 0;
   Vec3 lo = Vec3::Zero(), hi = Vec3::Zero();  // bounding box of the active voxel centres
+  Vec3 centre = Vec3::Zero();  // of the box, and the radius of a sphere around it (Bound)
+  float radius = 0.f;
   float min_distance = 0.f;  // smallest distance of the active voxels
   bool seen = false;         // some view had all of them in its image
   bool per_voxel = false;    // voxels near the surface: always tested one by one
