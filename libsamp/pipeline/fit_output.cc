@@ -202,9 +202,55 @@ TrackFit TrackFitFromJson(const JsonFields& j, AlignedBox* box) {
   return fit;
 }
 
+namespace {
+
+constexpr const char* kDetectorModelOrigins[3] = {"self-calibration", "file", "none"};
+
+bool IsDetectorModelOrigin(const std::string& origin) {
+  return std::find(std::begin(kDetectorModelOrigins), std::end(kDetectorModelOrigins), origin) !=
+         std::end(kDetectorModelOrigins);
+}
+
+// "detector_model": how the run got its detector noise model and, unless it
+// used none, the model in the format of its one owner (DetectorNoiseModel::
+// ToJson, the text of OUT/detector_model.json) as a nested object.
+nlohmann::json DetectorModelRecordToJson(const TracksFileDetectorModel& record, const std::string& path) {
+  SAMP_CHECK(IsDetectorModelOrigin(record.origin))
+      << path << ": detector model origin '" << record.origin << "' is not one of self-calibration, file, none";
+  nlohmann::json j = nlohmann::json::object();
+  j["origin"] = record.origin;
+  if (record.origin == "file") j["file"] = record.file;
+  if (record.origin == "none") {
+    j["reason"] = record.reason;
+  } else {
+    j["model"] = ParseJson(record.model.ToJson(), path + ": detector_model.model");
+  }
+  return j;
+}
+
+TracksFileDetectorModel DetectorModelRecordFromJson(const JsonFields& j) {
+  TracksFileDetectorModel record;
+  j.Read("origin", &record.origin);
+  SAMP_CHECK(IsDetectorModelOrigin(record.origin))
+      << j.Where() << ": key 'origin' must be \"self-calibration\", \"file\" or \"none\", got \"" << record.origin
+      << "\"";
+  if (record.origin == "file") j.Read("file", &record.file);
+  if (record.origin == "none") {
+    j.Read("reason", &record.reason);
+  } else {
+    // Checked as a detector model file is (format, version, every key and range).
+    record.model = DetectorNoiseModelFromJson(DumpJson(j.At("model")), j.Where() + ".model");
+  }
+  return record;
+}
+
+}  // namespace
+
 void WriteTracksFile(const std::string& path, const TracksFile& file) {
   nlohmann::json tracks_json;
   tracks_json["model"] = file.model;
+  if (!file.detector_model.origin.empty())
+    tracks_json["detector_model"] = DetectorModelRecordToJson(file.detector_model, path);
   tracks_json["sequences"] = nlohmann::json::array();
   for (const TracksFileSequence& r : file.sequences) {
     nlohmann::json js;
@@ -233,6 +279,7 @@ TracksFile ReadTracksFile(const std::string& path) {
   const JsonFields j(json, path);
   TracksFile file;
   j.Read("model", &file.model);
+  if (j.Has("detector_model")) file.detector_model = DetectorModelRecordFromJson(j.Object("detector_model"));
   for (const JsonFields& js : j.Objects("sequences")) {
     TracksFileSequence r;
     js.Read("directory", &r.directory);

@@ -11,8 +11,9 @@
 
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/mesh.h"
-#include "libsamp/fit/fitter.h"
+#include "libsamp/data/detector_noise.h"
 #include "libsamp/data/track.h"
+#include "libsamp/fit/fitter.h"
 
 namespace samp {
 
@@ -67,12 +68,29 @@ struct TracksFileSequence {
   std::vector<TracksFileTrack> tracks;
   std::vector<std::string> failed_tracks;   // "track <id>: message"
 };
+// The detector noise model the run linked and fitted with ("detector_model"
+// in tracks.json): one per run, the same for every sequence of it.
+struct TracksFileDetectorModel {
+  // "self-calibration" (estimated from the run's sequences), "file" (read
+  // from RunFitOptions::detector_model_path) or "none" (the tracker's and the
+  // fit's detector options as given). Empty: not recorded (a tracks.json of a
+  // samp before the key; not written).
+  std::string origin;
+  std::string file;    // origin "file": the model file read
+  std::string reason;  // origin "none": why the run used no model
+  // Unless origin is "none": the model as OUT/detector_model.json holds it,
+  // written and read by its one owner (DetectorNoiseModel::ToJson,
+  // DetectorNoiseModelFromJson), sample counts and notes included.
+  DetectorNoiseModel model;
+};
 struct TracksFile {
   std::string model;  // the model file the fit used
+  TracksFileDetectorModel detector_model;
   std::vector<TracksFileSequence> sequences;
 };
 void WriteTracksFile(const std::string& path, const TracksFile& file);
-// Throws samp::Error naming the file and the key when a key is missing.
+// Throws samp::Error naming the file and the key when a key is missing, or
+// "detector_model" is malformed (it may be absent: origin stays empty).
 TracksFile ReadTracksFile(const std::string& path);
 
 }  // namespace samp

@@ -283,6 +283,26 @@ RunFitOptions CalibratedOptions(const RunFitOptions& options, RunFitSummary* sum
   return effective;
 }
 
+// tracks.json's record of the detector model the run linked and fitted with
+// (CalibratedOptions, then the box convention): the run's one model, the
+// same for each of its sequences.
+TracksFileDetectorModel DetectorModelRecord(const RunFitOptions& options, const RunFitSummary& summary) {
+  TracksFileDetectorModel record;
+  if (!summary.detector_model_used) {
+    record.origin = "none";
+    record.reason =
+        "self-calibration off and no detector model file: the tracker's and the fit's detector sigmas as "
+        "given (config.json)";
+  } else if (!options.detector_model_path.empty()) {
+    record.origin = "file";
+    record.file = options.detector_model_path;
+  } else {
+    record.origin = "self-calibration";
+  }
+  record.model = summary.detector_model;
+  return record;
+}
+
 std::string BoxConventionReport(const DetectorNoiseModel& m, bool apply_along) {
   std::ostringstream s;
   s.precision(3);
@@ -482,6 +502,7 @@ RunFitSummary RunFit(const RunFitOptions& options) {
 
   TracksFile tracks_file;
   tracks_file.model = options.model_path;
+  tracks_file.detector_model = DetectorModelRecord(options, summary);
   for (SequenceWork& w : work) {
     summary.sequences.push_back(w.result);
     const SequenceFitResult& r = w.result;

@@ -4,7 +4,8 @@
 //   OUT/label_02/<seq>.txt    KITTI tracking result lines
 //   OUT/meshes/track_<id>.ply, track_<id>_points.ply
 //                             (OUT/meshes/<seq>/... when several sequences)
-//   OUT/tracks.json           per sequence and track: shape, poses, costs
+//   OUT/tracks.json           per sequence and track: shape, poses, costs;
+//                             the run's detector model ("detector_model")
 //   OUT/config.json           effective options and model file
 // Sequences and tracks run in parallel (TBB); a sequence or track that fails
 // is reported in the summary and skipped, the others complete. A failed
@@ -71,9 +72,9 @@ struct RunFitOptions {
   // conventions"): the near, well-observed cars are fitted to their points
   // alone, compared with their detections, and every car is fitted with the
   // estimate (unless calibration.estimate_box_convention is false or the fit
-  // options give a bias). The estimate goes to OUT/detector_model.json and the
-  // summary. On by default (`samp fit --no-self-calibrate`: the tracker's
-  // fixed sigmas, no box convention).
+  // options give a bias). The estimate goes to OUT/detector_model.json,
+  // tracks.json ("detector_model") and the summary. On by default (`samp fit
+  // --no-self-calibrate`: the tracker's fixed sigmas, no box convention).
   bool self_calibrate = true;
   CalibrationOptions calibration;
   // A detector model file (`samp calibrate-detector`, data/detector_noise.h)

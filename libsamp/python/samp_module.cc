@@ -216,6 +216,9 @@ py::dict SummaryDict(const RunFitSummary& s) {
   d["num_tracks_failed"] = s.num_tracks_failed;
   d["failure"] = s.failure;
   d["replaced_previous_output"] = s.replaced_previous_output;
+  // The detector model the run used (its file's format: DetectorNoiseModel::ToJson), None without one.
+  d["detector_model"] = s.detector_model_used ? py::module_::import("json").attr("loads")(s.detector_model.ToJson())
+                                              : py::object(py::none());
   d["seconds_calibration"] = s.seconds_calibration;
   d["seconds"] = s.seconds;
   d["report"] = s.BriefReport();

@@ -14,6 +14,7 @@
 #include <iostream>
 #include <map>
 
+#include "libsamp/core/json_fields.h"
 #include "libsamp/core/mesh.h"
 #include "libsamp/core/ply_io.h"
 #include "libsamp/data/kitti_io.h"
@@ -177,6 +178,13 @@ TEST(BoxConvention, MirrorsExcludedFromTheBoxesDoNotShrinkTheFit) {
   const DetectorNoiseModel written = ReadDetectorNoiseModel(scene.root + "/fit_on/detector_model.json");
   EXPECT_TRUE(written.box_convention_estimated);
   EXPECT_EQ(written.size_bias[1], model.size_bias[1]);
+  // tracks.json records the same estimate, box convention and sample counts included.
+  const nlohmann::json record = ReadJsonFile(scene.root + "/fit_on/tracks.json").at("detector_model");
+  EXPECT_EQ(record.at("origin"), "self-calibration");
+  EXPECT_EQ(record.at("model"), ReadJsonFile(scene.root + "/fit_on/detector_model.json"));
+  EXPECT_EQ(record.at("model").at("source"), "self-calibration");
+  EXPECT_GT(record.at("model").at("samples").at("position").get<int>(), 0);
+  EXPECT_EQ(record.at("model").at("box_convention").at("cars"), model.box_convention_tracks);
   int tracks_on = 0;
   const double error_on = MedianWidthError(scene, scene.root + "/fit_on", &tracks_on);
 

@@ -197,6 +197,86 @@ TEST(FitOutput, TracksFileRoundTripAndMissingKeys) {
   EXPECT_NE(message.find("'yaw'"), std::string::npos) << message;
 }
 
+// tracks.json's "detector_model": how the run got its detector model and the
+// model itself in the format of OUT/detector_model.json (its one writer),
+// sample counts included; "none" with the reason; absent in files of a samp
+// before the key; a bad origin or model names the file and the key.
+TEST(FitOutput, TracksFileRecordsTheDetectorModel) {
+  DetectorNoiseModel model;
+  model.source = "self-calibration";
+  model.along_sigma_a = 0.31;
+  model.size_sigma[2] = 0.45;
+  model.num_position_samples = 120, model.num_size_samples = 118, model.num_yaw_samples = 117;
+  model.num_tracks = 6, model.num_frames = 40;
+  DistanceBin bin;
+  bin.max_distance = 10.0;
+  bin.count = 50;
+  bin.along_sigma = bin.across_sigma = bin.vertical_sigma = 0.2;
+  model.bins = {bin};
+  model.notes = {"yaw: a note"};
+  const std::string path = TempFile("detector_tracks.json");
+
+  // Not recorded: no key, and a file without it reads.
+  TracksFile file;
+  file.model = "model.vdb";
+  WriteTracksFile(path, file);
+  EXPECT_FALSE(ReadJsonFile(path).contains("detector_model"));
+  EXPECT_EQ(ReadTracksFile(path).detector_model.origin, "");
+
+  // Self-calibration: the model object is what WriteDetectorNoiseModel writes.
+  file.detector_model.origin = "self-calibration";
+  file.detector_model.model = model;
+  WriteTracksFile(path, file);
+  const nlohmann::json written = ReadJsonFile(path).at("detector_model");
+  EXPECT_EQ(written.at("origin"), "self-calibration");
+  EXPECT_FALSE(written.contains("file"));
+  EXPECT_FALSE(written.contains("reason"));
+  const std::string model_file = TempFile("detector_model.json");
+  WriteDetectorNoiseModel(model_file, model);
+  EXPECT_EQ(written.at("model"), ReadJsonFile(model_file));
+  EXPECT_EQ(written.at("model").at("samples").at("position"), 120);
+  EXPECT_EQ(written.at("model").at("samples").at("tracks"), 6);
+  TracksFileDetectorModel read = ReadTracksFile(path).detector_model;
+  EXPECT_EQ(read.origin, "self-calibration");
+  EXPECT_EQ(read.model.ToJson(), model.ToJson());
+
+  // A model file: its path too.
+  file.detector_model.origin = "file";
+  file.detector_model.file = "calibrated/detector.json";
+  WriteTracksFile(path, file);
+  read = ReadTracksFile(path).detector_model;
+  EXPECT_EQ(read.origin, "file");
+  EXPECT_EQ(read.file, "calibrated/detector.json");
+  EXPECT_EQ(read.model.ToJson(), model.ToJson());
+
+  // None: the reason, no model.
+  file.detector_model = TracksFileDetectorModel();
+  file.detector_model.origin = "none";
+  file.detector_model.reason = "self-calibration off";
+  WriteTracksFile(path, file);
+  EXPECT_FALSE(ReadJsonFile(path).at("detector_model").contains("model"));
+  read = ReadTracksFile(path).detector_model;
+  EXPECT_EQ(read.origin, "none");
+  EXPECT_EQ(read.reason, "self-calibration off");
+
+  file.detector_model.origin = "guessed";
+  EXPECT_NE(ErrorOf([&] { WriteTracksFile(path, file); }).find("guessed"), std::string::npos);
+
+  // Bad files: the origin, and the model checked as a detector model file is.
+  nlohmann::json j = ReadJsonFile(path);
+  j["detector_model"]["origin"] = "guessed";
+  WriteTextFileAtomically(path, j.dump());
+  std::string message = ErrorOf([&] { ReadTracksFile(path); });
+  EXPECT_NE(message.find(path), std::string::npos) << message;
+  EXPECT_NE(message.find("detector_model: key 'origin'"), std::string::npos) << message;
+  j["detector_model"] = {{"origin", "self-calibration"}, {"model", ReadJsonFile(model_file)}};
+  j["detector_model"]["model"].erase("samples");
+  WriteTextFileAtomically(path, j.dump());
+  message = ErrorOf([&] { ReadTracksFile(path); });
+  EXPECT_NE(message.find(path + ": detector_model.model"), std::string::npos) << message;
+  EXPECT_NE(message.find("'samples'"), std::string::npos) << message;
+}
+
 // Bytes that are not UTF-8 in a sequence folder or calibration name (a
 // Latin-1 name) are written as U+FFFD: tracks.json and config.json once threw
 // json type_error 316 at the last step (issue 32).

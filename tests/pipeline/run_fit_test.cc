@@ -15,6 +15,7 @@
 
 #include "libsamp/core/atomic_file.h"
 #include "libsamp/core/error.h"
+#include "libsamp/core/json_fields.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/synth/synth.h"
 #include "libsamp/pipeline/fit_output.h"
@@ -358,10 +359,16 @@ TEST(RunFit, RemovesTheTemporaryFolderOfAKilledRun) {
 namespace samp {
 namespace {
 
-// Self-calibration (issue 28) on the small scene: too few detections for an
-// estimate, so every term keeps the given sigmas with a note; the model and its
-// sample counts go to the summary and OUT/detector_model.json, the option to
-// config.json. Off (--no-self-calibrate): neither (the outputs of earlier versions).
+// The "detector_model" object of OUT/tracks.json.
+nlohmann::json TracksDetectorModel(const std::string& out) {
+  return ReadJsonFile(out + "/tracks.json").at("detector_model");
+}
+
+// Self-calibration on the small scene: too few detections for an estimate,
+// so every term keeps the given sigmas with a note; the model and its sample
+// counts go to the summary, OUT/detector_model.json and tracks.json (the same
+// object), the option to config.json. Off (--no-self-calibrate): no
+// detector_model.json, tracks.json says no model was used and why.
 TEST(RunFitCalibration, SelfCalibrationWritesTheModel) {
   const test::BoxCarScene& scene = TheScene();
   const std::string runs = scene.Folder("calibrate");
@@ -376,6 +383,14 @@ TEST(RunFitCalibration, SelfCalibrationWritesTheModel) {
   const DetectorNoiseModel written = ReadDetectorNoiseModel(runs + "/on/detector_model.json");
   EXPECT_EQ(written.ToJson(), on.detector_model.ToJson());
   EXPECT_EQ(written.size_sigma[0], o.sequence.tracker.size_sigma);
+  const nlohmann::json record = TracksDetectorModel(runs + "/on");
+  EXPECT_EQ(record.at("origin"), "self-calibration");
+  EXPECT_EQ(record.at("model"), ReadJsonFile(runs + "/on/detector_model.json"));
+  EXPECT_EQ(record.at("model").at("source"), "defaults");
+  EXPECT_EQ(record.at("model").at("samples").at("frames"), on.detector_model.num_frames);
+  EXPECT_GT(on.detector_model.num_frames, 0);
+  EXPECT_EQ(record.at("model").at("notes").size(), on.detector_model.notes.size());
+  EXPECT_EQ(ReadTracksFile(runs + "/on/tracks.json").detector_model.model.ToJson(), on.detector_model.ToJson());
   std::ifstream config(runs + "/on/config.json");
   const std::string text((std::istreambuf_iterator<char>(config)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("\"self_calibrate\": true"), std::string::npos);
@@ -385,6 +400,10 @@ TEST(RunFitCalibration, SelfCalibrationWritesTheModel) {
   const RunFitSummary off = RunFit(o_off);
   EXPECT_FALSE(off.detector_model_used);
   EXPECT_FALSE(fs::exists(runs + "/off/detector_model.json"));
+  const nlohmann::json record_off = TracksDetectorModel(runs + "/off");
+  EXPECT_EQ(record_off.at("origin"), "none");
+  EXPECT_NE(record_off.at("reason").get<std::string>().find("self-calibration off"), std::string::npos);
+  EXPECT_FALSE(record_off.contains("model"));
   std::ifstream config_off(runs + "/off/config.json");
   const std::string text_off((std::istreambuf_iterator<char>(config_off)), std::istreambuf_iterator<char>());
   EXPECT_EQ(text_off.find("self_calibrate"), std::string::npos);
@@ -409,6 +428,11 @@ TEST(RunFitCalibration, DetectorModelFile) {
   EXPECT_TRUE(summary.detector_model_used);
   EXPECT_NE(summary.calibration_report.find("read from"), std::string::npos);
   EXPECT_EQ(ReadDetectorNoiseModel(runs + "/out/detector_model.json").size_sigma[1], 0.5);
+  const nlohmann::json record = TracksDetectorModel(runs + "/out");
+  EXPECT_EQ(record.at("origin"), "file");
+  EXPECT_EQ(record.at("file"), runs + "/model.json");
+  EXPECT_EQ(record.at("model"), ReadJsonFile(runs + "/out/detector_model.json"));
+  EXPECT_EQ(record.at("model").at("source"), "ground truth");
 
   WriteTextFileAtomically(runs + "/bad.json", "{\"format\": \"samp-detector-model\", \"version\": 9}");
   o.detector_model_path = runs + "/bad.json";
@@ -420,6 +444,7 @@ TEST(RunFitCalibration, DetectorModelFile) {
   o.output_dir = runs + "/file_wins";
   const RunFitSummary file_wins = RunFit(o);
   EXPECT_NE(file_wins.calibration_report.find("read from"), std::string::npos) << file_wins.calibration_report;
+  EXPECT_EQ(TracksDetectorModel(runs + "/file_wins").at("origin"), "file");
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 """The Python API of samp (libsamp/python): models, options, fit_sequence, train, sdf_of_mesh."""
 
+import json
 import os
 import shutil
 import subprocess
@@ -161,6 +162,15 @@ def test_fit_sequence_on_the_real_kitti_frame(model):
     assert 8.0 < np.linalg.norm(track.position_world[0]) < 20.0
     assert result.sequences[0]["ok"] and result.sequences[0]["tracking"]["detections"] == 1
     assert result.summary["num_tracks_fitted"] == 1
+    # The run's detector model (self-calibration on one detection: the defaults,
+    # with notes) in tracks.json, as detector_model.json and the summary hold it.
+    assert result.detector_model["origin"] == "self-calibration"
+    with open(os.path.join(result.folder, "detector_model.json")) as f:
+        assert result.detector_model["model"] == json.load(f)
+    assert result.summary["detector_model"] == result.detector_model["model"]
+    assert result.detector_model["model"]["source"] == "defaults"
+    assert result.detector_model["model"]["samples"]["frames"] == 1
+    assert result.detector_model["model"]["notes"]
     # The sequence's stages: reading the frames and the fit took time, no stage
     # is negative, and together they are no more than the whole sequence.
     seq_summary = result.summary["sequences"][0]

@@ -156,8 +156,12 @@ class FitResult:
 
     tracks: list of Track; sequences: per sequence dicts of tracks.json
     (directory, name, ok, error, input, input_messages, tracking = the tracker
-    summary, failed_tracks); summary: RunFit's summary (dict: sequences,
-    num_tracks_fitted, num_tracks_failed, failure, report, seconds,
+    summary, failed_tracks); detector_model: the "detector_model" object of
+    tracks.json (origin "self-calibration", "file" or "none"; unless "none"
+    the model with its sample counts under "model", as detector_model.json
+    holds it; None for a tracks.json without it); summary: RunFit's summary
+    (dict: sequences, num_tracks_fitted, num_tracks_failed, failure, report,
+    detector_model = the model the run used or None, seconds,
     seconds_calibration; each sequence also the wall time of its stages,
     seconds_frames, seconds_tracking, seconds_fit, seconds_output); config:
     the effective options (config.json); failure: why the run failed as `samp
@@ -177,6 +181,7 @@ class FitResult:
         with open(os.path.join(folder, "config.json")) as f:
             self.config = json.load(f)
         self.model = self.tracks_file.get("model", "")
+        self.detector_model = self.tracks_file.get("detector_model")
         self.sequences = []
         self.tracks = []
         for seq in self.tracks_file.get("sequences", []):
