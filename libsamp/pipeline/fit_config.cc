@@ -19,6 +19,8 @@ void OptionFields(OptionsJson& io, RunFitOptions& o) {
 void WriteFitConfig(const std::string& path, const FitConfig& config) {
   nlohmann::json j = OptionsToJson(config.options);
   j["model_components"] = config.model_components;
+  if (!config.detector_model.origin.empty())
+    j["detector_model_used"] = DetectorModelRecordToJson(config.detector_model, path);
   WriteTextFileAtomically(path, DumpJson(j, 2) + "\n");
 }
 
@@ -28,6 +30,8 @@ FitConfig ReadFitConfig(const std::string& path) {
   FitConfig config;
   OptionsFromJson(fields, &config.options);
   fields.Read("model_components", &config.model_components);
+  if (fields.Has("detector_model_used"))
+    config.detector_model = DetectorModelRecordFromJson(fields.Object("detector_model_used"));
   return config;
 }
 

@@ -12,6 +12,7 @@
 #include "libsamp/data/observation_option_table.h"
 #include "libsamp/data/sequence_option_table.h"
 #include "libsamp/fit/fit_option_table.h"
+#include "libsamp/pipeline/fit_output.h"
 #include "libsamp/pipeline/run_fit.h"
 
 namespace samp {
@@ -25,6 +26,13 @@ void OptionFields(OptionsJson& io, RunFitOptions& o);
 struct FitConfig {
   RunFitOptions options;
   int model_components = 0;  // of the model file the fit used
+  // The detector noise model the run linked and fitted with (self-calibrated,
+  // read, or none), as tracks.json records it: with the options, what the
+  // run's tracker and detection terms effectively used. Written when origin
+  // is set, as "detector_model_used" (the key "detector_model" is the option
+  // --detector-model); a config.json without it (earlier samp) reads with
+  // origin empty.
+  TracksFileDetectorModel detector_model;
 };
 
 void WriteFitConfig(const std::string& path, const FitConfig& config);

@@ -211,9 +211,8 @@ bool IsDetectorModelOrigin(const std::string& origin) {
          std::end(kDetectorModelOrigins);
 }
 
-// "detector_model": how the run got its detector noise model and, unless it
-// used none, the model in the format of its one owner (DetectorNoiseModel::
-// ToJson, the text of OUT/detector_model.json) as a nested object.
+}  // namespace
+
 nlohmann::json DetectorModelRecordToJson(const TracksFileDetectorModel& record, const std::string& path) {
   SAMP_CHECK(IsDetectorModelOrigin(record.origin))
       << path << ": detector model origin '" << record.origin << "' is not one of self-calibration, file, none";
@@ -243,8 +242,6 @@ TracksFileDetectorModel DetectorModelRecordFromJson(const JsonFields& j) {
   }
   return record;
 }
-
-}  // namespace
 
 void WriteTracksFile(const std::string& path, const TracksFile& file) {
   nlohmann::json tracks_json;

@@ -83,6 +83,15 @@ struct TracksFileDetectorModel {
   // DetectorNoiseModelFromJson), sample counts and notes included.
   DetectorNoiseModel model;
 };
+// "detector_model" of tracks.json and config.json: how the run got its
+// detector noise model and, unless it used none, the model in the format of
+// its one owner (DetectorNoiseModel::ToJson, the text of
+// OUT/detector_model.json) as a nested object. `path` names the file in
+// errors; throws samp::Error for an unknown origin.
+nlohmann::json DetectorModelRecordToJson(const TracksFileDetectorModel& record, const std::string& path);
+// Throws samp::Error naming the key for a bad origin or a malformed model.
+TracksFileDetectorModel DetectorModelRecordFromJson(const JsonFields& j);
+
 struct TracksFile {
   std::string model;  // the model file the fit used
   TracksFileDetectorModel detector_model;

@@ -526,6 +526,7 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   FitConfig config;
   config.options = options;
   config.model_components = model ? model->NumComponents() : 0;
+  config.detector_model = tracks_file.detector_model;
   WriteFitConfig((fs::path(folder) / "config.json").string(), config);
   if (summary.detector_model_used)
     WriteDetectorNoiseModel((fs::path(folder) / "detector_model.json").string(), summary.detector_model);

@@ -343,9 +343,23 @@ TEST(FitOutput, ConfigHoldsEveryOptionAndReadsBack) {
   EXPECT_EQ(read.options.sequence.stereo.block_size, 7);
   EXPECT_EQ(read.options.sequence.road_plane.seed, 42u);
   EXPECT_EQ(read.options.sequence.tracker.min_track_length, 1);
+  EXPECT_TRUE(read.detector_model.origin.empty());  // none given: no key
+  EXPECT_FALSE(j.contains("detector_model_used"));
   // Writing what was read gives the same file.
   WriteFitConfig(path + ".2", read);
   EXPECT_EQ(ReadJsonFile(path + ".2"), j);
+
+  // The run's detector model, as tracks.json records it, reads back.
+  FitConfig with_model = config;
+  with_model.detector_model.origin = "self-calibration";
+  with_model.detector_model.model.size_sigma[1] = 0.42;
+  with_model.detector_model.model.num_frames = 17;
+  WriteFitConfig(path + ".3", with_model);
+  const FitConfig read_model = ReadFitConfig(path + ".3");
+  EXPECT_EQ(read_model.detector_model.origin, "self-calibration");
+  EXPECT_EQ(read_model.detector_model.model.ToJson(), with_model.detector_model.model.ToJson());
+  EXPECT_EQ(ReadJsonFile(path + ".3").at("detector_model_used"),
+            DetectorModelRecordToJson(with_model.detector_model, path + ".3"));
 
   nlohmann::json broken = j;
   broken["sequence"]["road_plane"].erase("max_tilt_deg");

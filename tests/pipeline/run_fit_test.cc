@@ -18,6 +18,7 @@
 #include "libsamp/core/json_fields.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/synth/synth.h"
+#include "libsamp/pipeline/fit_config.h"
 #include "libsamp/pipeline/fit_output.h"
 #include "libsamp/pipeline/run_fit.h"
 #include "tests/synth/test_scene.h"
@@ -394,6 +395,9 @@ TEST(RunFitCalibration, SelfCalibrationWritesTheModel) {
   std::ifstream config(runs + "/on/config.json");
   const std::string text((std::istreambuf_iterator<char>(config)), std::istreambuf_iterator<char>());
   EXPECT_NE(text.find("\"self_calibrate\": true"), std::string::npos);
+  // config.json records the same model, with the options it came from.
+  EXPECT_EQ(ReadJsonFile(runs + "/on/config.json").at("detector_model_used"), record);
+  EXPECT_EQ(ReadFitConfig(runs + "/on/config.json").detector_model.model.ToJson(), on.detector_model.ToJson());
 
   RunFitOptions o_off = Options(scene.model, {scene.sequences[0]}, runs + "/off");
   o_off.self_calibrate = false;  // --no-self-calibrate
@@ -404,6 +408,7 @@ TEST(RunFitCalibration, SelfCalibrationWritesTheModel) {
   EXPECT_EQ(record_off.at("origin"), "none");
   EXPECT_NE(record_off.at("reason").get<std::string>().find("self-calibration off"), std::string::npos);
   EXPECT_FALSE(record_off.contains("model"));
+  EXPECT_EQ(ReadJsonFile(runs + "/off/config.json").at("detector_model_used"), record_off);
   std::ifstream config_off(runs + "/off/config.json");
   const std::string text_off((std::istreambuf_iterator<char>(config_off)), std::istreambuf_iterator<char>());
   EXPECT_EQ(text_off.find("self_calibrate"), std::string::npos);
@@ -433,6 +438,7 @@ TEST(RunFitCalibration, DetectorModelFile) {
   EXPECT_EQ(record.at("file"), runs + "/model.json");
   EXPECT_EQ(record.at("model"), ReadJsonFile(runs + "/out/detector_model.json"));
   EXPECT_EQ(record.at("model").at("source"), "ground truth");
+  EXPECT_EQ(ReadJsonFile(runs + "/out/config.json").at("detector_model_used"), record);
 
   WriteTextFileAtomically(runs + "/bad.json", "{\"format\": \"samp-detector-model\", \"version\": 9}");
   o.detector_model_path = runs + "/bad.json";
