@@ -184,7 +184,7 @@ DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& 
       << options.match_distance << " m (" << result.BriefReport() << "); at least " << options.noise.min_samples
       << " are needed: give more sequences, or check that the labels belong to the sequences";
   return EstimateDetectorNoiseFromTruth(matches, num_missed, num_false_positives, result.num_frames, options.noise,
-                                        options.defaults);
+                                        options.defaults, options.match_distance);
 }
 
 }  // namespace samp

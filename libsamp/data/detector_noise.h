@@ -24,6 +24,7 @@
 // checked when read and errors name the file and the key.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -51,7 +52,8 @@ struct DetectorNoiseModel {
   double along_sigma_a = 0.25, along_sigma_b = 0.015;
   double across_sigma_a = 0.1, across_sigma_b = 0.005;
   double vertical_sigma_a = 0.2, vertical_sigma_b = 0.002;
-  // Median position error along the ray (m; ground truth only).
+  // Centre of the position error along the ray (m; ground truth only): the
+  // distance bins' robust centres weighted by their inverse variances.
   double along_bias = 0.0;
   // Per box dimension h, w, l: std. dev. and bias (detected - true, m).
   double size_sigma[3] = {0.3, 0.3, 0.3};
@@ -208,11 +210,15 @@ struct MatchedDetection {
 
 // Calibration against ground truth: `matches` are detections with their true
 // boxes, `num_missed` true boxes without a detection, `num_false_positives`
-// detections without a true box, over `num_frames` frames.
-DetectorNoiseModel EstimateDetectorNoiseFromTruth(const std::vector<MatchedDetection>& matches, int num_missed,
-                                                  int num_false_positives, int num_frames,
-                                                  const DetectorNoiseOptions& options,
-                                                  const TrackerOptions& defaults);
+// detections without a true box, over `num_frames` frames. `match_distance`:
+// the horizontal distance (m) within which the matches were made (infinity:
+// no gate). The gate cuts the error's tails, unevenly when the detector is
+// biased; the statistics keep their windows inside it, so the along-ray bias
+// and the far bins' sigmas are not pulled towards 0 by it.
+DetectorNoiseModel EstimateDetectorNoiseFromTruth(
+    const std::vector<MatchedDetection>& matches, int num_missed, int num_false_positives, int num_frames,
+    const DetectorNoiseOptions& options, const TrackerOptions& defaults,
+    double match_distance = std::numeric_limits<double>::infinity());
 
 // Self-calibrating tracking: link with robust cues (and `initial`'s sigmas),
 // estimate the noise model from all sequences, re-link with it, until the
