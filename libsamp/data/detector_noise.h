@@ -259,15 +259,20 @@ TrackerOptions TrackerForModel(const TrackerOptions& initial, const DetectorNois
 CalibrationResult CalibrateTracker(const std::vector<std::vector<FrameDetections>>& frames_of_sequence,
                                    const TrackerOptions& initial, const CalibrationOptions& options);
 
-// `samp calibrate-detector`: the detections of sequence directories
-// (detections/, the sequence layout) matched to ground-truth tracking labels
+// `samp calibrate-detector`: the detections of sequences (their layout's, or
+// SequenceOptions::detections_path: e.g. a tracker's KITTI tracking result
+// file, whose track ids are ignored) matched to ground-truth tracking labels
 // (KITTI label_02 format) frame by frame: a minimum-cost assignment on the
 // horizontal distance of the bottom centres, pairs within match_distance.
 struct DetectorCalibrationOptions {
   std::vector<std::string> sequences;
-  // One KITTI tracking label file per sequence; empty = SEQ/gt/label_02/<seq>.txt.
+  // One KITTI tracking label file per sequence; empty = SEQ/gt/label_02/<seq>.txt
+  // (samp's layout) or ROOT/label_02/<seq>.txt (KITTI tracking's, ROOT/image_02/<seq>).
   std::vector<std::string> truth_labels;
-  SequenceOptions sequence;      // object types, minimum score, frame range
+  // Object types, minimum score, frame range and the detections:
+  // detections_path (a file only with one sequence, else a folder of
+  // <seq>.txt) and detection_format; tracking_labels_path must be empty.
+  SequenceOptions sequence;
   double match_distance = 3.0;   // m
   DetectorNoiseOptions noise;
   TrackerOptions defaults;       // the values of terms with too few samples
@@ -279,8 +284,9 @@ struct DetectorCalibrationSummary {
   std::string BriefReport() const;
 };
 
-// Throws samp::Error naming the file when a sequence or label file cannot be
-// read, a label file has labels in frames its sequence does not have
+// Throws samp::Error naming the file when a sequence, detection or label file
+// cannot be read (a malformed line, a wrong column count: file and line), a
+// label or detection file has entries in frames its sequence does not have
 // (mismatched files), or fewer than noise.min_samples detections match.
 DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& options,
                                               DetectorCalibrationSummary* summary = nullptr);

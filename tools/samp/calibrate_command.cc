@@ -6,6 +6,7 @@
 
 #include "libsamp/data/calibration_option_table.h"
 #include "libsamp/data/detector_noise.h"
+#include "libsamp/data/sequence_option_table.h"
 #include "tools/samp/commands.h"
 #include "tools/samp/option_cli.h"
 
@@ -20,15 +21,26 @@ void RegisterCalibrateCommand(CLI::App* app) {
   CLI::App* command = app->add_subcommand(
       "calibrate-detector",
       "Measure a 3D car detector's noise model (position along/across the ray and vertical by distance,\n"
-      "box dimensions with biases, yaw, flips, misses, false positives) from its detections in sequence\n"
-      "directories and ground-truth tracking labels (KITTI label_02); writes the JSON that\n"
+      "box dimensions with biases, yaw, flips, misses, false positives) from its detections (a sequence's\n"
+      "detections/, or --detections: e.g. a tracker's KITTI tracking result file, its track ids ignored)\n"
+      "and ground-truth tracking labels (KITTI label_02); writes the JSON that\n"
       "`samp fit --detector-model` reads (docs/detector_calibration.md).");
-  command->add_option("--seq", args->options.sequences, "Sequence directory (detections/); repeatable")
+  const std::string input_group = "Input (docs/sequence_format.md)";
+  command
+      ->add_option("--seq", args->options.sequences,
+                   "Sequence directory (samp's layout, or KITTI tracking's ROOT/image_02/<seq>); repeatable")
       ->required()
-      ->check(CLI::ExistingDirectory);
-  command->add_option("--labels", args->options.truth_labels,
-                      "Ground-truth KITTI tracking label file, one per --seq (default: SEQ/gt/label_02/<seq>.txt)")
-      ->check(CLI::ExistingFile);
+      ->check(CLI::ExistingDirectory)
+      ->group(input_group);
+  // SequenceOptions' own options (--detections, --detection-format, --min-score, --types): its table
+  // (data/sequence_option_table.h), as `samp fit` takes them.
+  AddTableOptions(command, SequenceOptionTable().Bind(&args->options.sequence), "", input_group);
+  command
+      ->add_option("--labels", args->options.truth_labels,
+                   "Ground-truth KITTI tracking label file, one per --seq (default: SEQ/gt/label_02/<seq>.txt; "
+                   "KITTI tracking: ROOT/label_02/<seq>.txt)")
+      ->check(CLI::ExistingFile)
+      ->group(input_group);
   command->add_option("--match-distance", args->options.match_distance,
                       "A detection matches a true box within this horizontal distance, m")
       ->capture_default_str()
