@@ -207,11 +207,12 @@ void SummarisePosition(const std::vector<Residual>& residuals, const DetectorNoi
                          ev = Robust(vertical[b], o.trim_sigmas);
     bin.along_sigma = ea.sigma, bin.across_sigma = ec.sigma, bin.vertical_sigma = ev.sigma;
     if (with_biases) bin.along_bias = ea.center, bin.across_bias = ec.center, bin.vertical_bias = ev.center;
-    model->bins.push_back(bin);
-    if (bin.count < o.min_bin_count) continue;
     double mean_distance = 0;
     for (double d : distance[b]) mean_distance += d;
     mean_distance /= distance[b].size();
+    bin.mean_distance = mean_distance;
+    model->bins.push_back(bin);
+    if (bin.count < o.min_bin_count) continue;
     fit_along.push_back({mean_distance, bin.along_sigma});
     fit_across.push_back({mean_distance, bin.across_sigma});
     fit_vertical.push_back({mean_distance, bin.vertical_sigma});

@@ -37,6 +37,9 @@ namespace samp {
 struct DistanceBin {
   double min_distance = 0.0, max_distance = 0.0;
   int count = 0;  // detections in the bin
+  // Their mean horizontal distance (m): where the bin's sigmas enter the
+  // a + b d fit. 0 = not recorded (a file written without it).
+  double mean_distance = 0.0;
   // Robust std. dev. and bias (median) of the position error (m).
   double along_sigma = 0.0, across_sigma = 0.0, vertical_sigma = 0.0;
   double along_bias = 0.0, across_bias = 0.0, vertical_bias = 0.0;

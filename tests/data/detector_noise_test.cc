@@ -378,6 +378,10 @@ TEST(DetectorNoiseModelFile, RoundTripAndClearErrors) {
   const DetectorNoiseModel back = ReadDetectorNoiseModel(path);
   EXPECT_EQ(back.ToJson(), m.ToJson());
   EXPECT_EQ(back.bins.size(), m.bins.size());
+  for (const DistanceBin& b : back.bins) {  // where the plot puts the bin
+    EXPECT_GE(b.mean_distance, b.min_distance);
+    EXPECT_LT(b.mean_distance, b.max_distance);
+  }
 
   auto write = [&](const std::string& text) {
     std::ofstream(path) << text;
@@ -396,6 +400,13 @@ TEST(DetectorNoiseModelFile, RoundTripAndClearErrors) {
   j = nlohmann::json::parse(m.ToJson());
   j.erase("flip_rate");
   test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"flip_rate"});
+  // A file without the bins' mean distances (optional) reads; one outside its bin does not.
+  j = nlohmann::json::parse(m.ToJson());
+  for (auto& bin : j["distance_bins"]) bin.erase("mean_distance");
+  EXPECT_EQ(ReadDetectorNoiseModel(write(j.dump())).bins.front().mean_distance, 0.0);
+  j = nlohmann::json::parse(m.ToJson());
+  j["distance_bins"][0]["mean_distance"] = 500.0;
+  test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"distance_bins[0].mean_distance"});
   j = nlohmann::json::parse(m.ToJson());
   j["miss_rate"] = 1.5;
   test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"miss_rate"});
