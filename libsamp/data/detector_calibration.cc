@@ -4,6 +4,7 @@
 // detector_noise.cc. Declared in data/detector_noise.h.
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <map>
 #include <sstream>
 #include <vector>
@@ -13,6 +14,7 @@
 #include "libsamp/data/calibration_option_table.h"
 #include "libsamp/data/detector_noise.h"
 #include "libsamp/data/kitti_io.h"
+#include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/sequence_layout.h"
 
 namespace samp {
@@ -105,6 +107,15 @@ void DetectorCalibrationOptions::Check() const {
       << "DetectorCalibrationOptions.truth_labels: " << truth_labels.size() << " files for " << sequences.size()
       << " sequences (give none or one per sequence)";
   SAMP_CHECK(match_distance > 0) << "DetectorCalibrationOptions.match_distance must be > 0";
+  std::error_code error;
+  SAMP_CHECK(sequence.detections_path.empty() || sequences.size() == 1 ||
+             std::filesystem::is_directory(sequence.detections_path, error))
+      << "DetectorCalibrationOptions.sequence.detections_path (--detections) " << sequence.detections_path
+      << " is a file, but " << sequences.size()
+      << " sequences are calibrated: give a folder with <seq>.txt per sequence";
+  SAMP_CHECK(sequence.tracking_labels_path.empty())
+      << "DetectorCalibrationOptions.sequence.tracking_labels_path must be empty: the detector is calibrated on "
+         "detections, not tracks";
   sequence.Check();
   noise.Check();
   defaults.Check();
@@ -117,6 +128,25 @@ std::string DetectorCalibrationSummary::BriefReport() const {
   return s.str();
 }
 
+namespace {
+
+// The ground truth beside a sequence: SEQ/gt/label_02/<seq>.txt (samp's
+// layout, as `samp synth` writes it) or ROOT/label_02/<seq>.txt (KITTI
+// tracking's); KITTI stereo's layout has none.
+std::string DefaultTruthLabels(const SequenceFiles& files) {
+  if (files.layout == SequenceFiles::Layout::kKittiTracking) {
+    KittiTrackingLayout layout("", "");
+    SAMP_CHECK(KittiTrackingLayout::FromSequenceFolder(files.directory, &layout))
+        << files.directory << ": not a KITTI tracking sequence folder ROOT/image_02/<seq>";
+    return layout.Labels();
+  }
+  SAMP_CHECK(files.layout == SequenceFiles::Layout::kSamp)
+      << "sequence " << files.directory << " has no tracking labels of its own layout: give --labels";
+  return SequenceLayout(files.directory, files.name).GroundTruthLabels();
+}
+
+}  // namespace
+
 DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& options,
                                               DetectorCalibrationSummary* summary) {
   options.Check();
@@ -128,9 +158,11 @@ DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& 
   for (size_t s = 0; s < options.sequences.size(); ++s) {
     const SequenceReader reader(options.sequences[s], options.sequence);
     const SequenceFiles& files = reader.files();
-    const std::string labels_path = options.truth_labels.empty()
-                                        ? SequenceLayout(files.directory, files.name).GroundTruthLabels()
-                                        : options.truth_labels[s];
+    const std::string labels_path =
+        options.truth_labels.empty() ? DefaultTruthLabels(files) : options.truth_labels[s];
+    // The labels are in the layout's label frame (KITTI: rectified camera 0),
+    // the detections the reader gives in the camera's.
+    const Eigen::Vector3d camera_from_label_frame = -reader.label_frame_offset();
     std::map<int, std::vector<ObjectLabel>> truth_of_frame;
     std::map<int, int> index_of_frame;
     for (int i = 0; i < reader.num_frames(); ++i) index_of_frame[files.frames[i].frame] = i;
@@ -146,7 +178,7 @@ DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& 
       SAMP_CHECK(index_of_frame.count(label.frame) > 0)
           << labels_path << ": a label in frame " << label.frame << ", which sequence " << options.sequences[s]
           << " does not have (mismatched label file?)";
-      truth_of_frame[label.frame].push_back(label);
+      truth_of_frame[label.frame].push_back(MoveLabel(label, camera_from_label_frame));
     }
     for (const auto& [frame, index] : index_of_frame) {
       if (!in_range(frame)) continue;
@@ -184,7 +216,7 @@ DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& 
       << options.match_distance << " m (" << result.BriefReport() << "); at least " << options.noise.min_samples
       << " are needed: give more sequences, or check that the labels belong to the sequences";
   return EstimateDetectorNoiseFromTruth(matches, num_missed, num_false_positives, result.num_frames, options.noise,
-                                        options.defaults);
+                                        options.defaults, options.match_distance);
 }
 
 }  // namespace samp

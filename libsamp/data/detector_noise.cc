@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -19,6 +20,19 @@ namespace {
 // rounds of the mean and standard deviation of the values within trim x sigma
 // of the centre, the variance corrected for the trimming of a normal
 // distribution (Var[z | |z| < k] = 1 - 2 k phi(k) / (2 Phi(k) - 1)).
+//
+// A gate. Values matched to ground truth within a distance were only kept
+// where |v_i| <= limit_i (`limits`, one per value; empty = no gate): a tail
+// reaching past the gate is cut on one side more than on the other when the
+// centre is not 0, and a window of +-trim sigma around the centre would keep
+// the spared side and pull the centre towards 0. So each value's window is
+// kept inside its gate, half-width h_i = min(trim sigma, limit_i - |centre|)
+// (a value whose window is empty is left out): inside it the value's
+// distribution is symmetric about the true centre, and the centre is
+// unbiased. The variance is corrected per value for its own window:
+// sigma^2 = sum (v_i - c)^2 / (sum V(h_i / sigma) (n - 1) / n) over the n
+// values inside, V(k) the truncated variance above (without a gate: the
+// plain formula's sum / ((n - 1) V(trim))).
 struct RobustEstimate {
   double center = 0.0, sigma = 0.0;
   int count = 0;
@@ -33,29 +47,48 @@ double Median(std::vector<double> v) {
   return m;
 }
 
-RobustEstimate Robust(const std::vector<double>& values, double trim) {
+// Var[z | |z| < k] of a standard normal z.
+double TruncatedVariance(double k) {
+  if (k <= 1e-6) return 0.0;
+  const double phi = std::exp(-0.5 * k * k) / std::sqrt(2 * kPi);
+  return 1.0 - 2.0 * k * phi / std::erf(k / std::sqrt(2.0));
+}
+
+RobustEstimate Robust(const std::vector<double>& values, double trim, const std::vector<double>& limits = {}) {
   RobustEstimate r;
   r.count = static_cast<int>(values.size());
   if (values.empty()) return r;
+  const bool gated = !limits.empty();
   r.center = Median(values);
   std::vector<double> deviations;
   deviations.reserve(values.size());
   for (double v : values) deviations.push_back(std::abs(v - r.center));
   r.sigma = 1.4826 * Median(deviations);
-  const double phi = std::exp(-0.5 * trim * trim) / std::sqrt(2 * kPi);
-  const double inside = std::erf(trim / std::sqrt(2.0));
-  const double truncated_variance = 1.0 - 2.0 * trim * phi / inside;
-  for (int round = 0; round < 5 && r.sigma > 0; ++round) {
-    double sum = 0, sum2 = 0;
+  const double ungated_variance = TruncatedVariance(trim);
+  for (int round = 0; round < (gated ? 20 : 5) && r.sigma > 0; ++round) {
+    auto half_width = [&](size_t i) {
+      return gated ? std::min(trim * r.sigma, limits[i] - std::abs(r.center)) : trim * r.sigma;
+    };
+    double sum = 0, expected = 0;
     int n = 0;
-    for (double v : values)
-      if (std::abs(v - r.center) <= trim * r.sigma) sum += v, ++n;
-    if (n < 2) break;
+    for (size_t i = 0; i < values.size(); ++i) {
+      const double h = half_width(i);
+      if (h > 0 && std::abs(values[i] - r.center) <= h) {
+        sum += values[i], ++n;
+        expected += gated ? TruncatedVariance(h / r.sigma) : ungated_variance;
+      }
+    }
+    if (n < 2 || expected <= 0) break;
     const double center = sum / n;
-    for (double v : values)
-      if (std::abs(v - r.center) <= trim * r.sigma) sum2 += (v - center) * (v - center);
+    double sum2 = 0;
+    for (size_t i = 0; i < values.size(); ++i) {
+      const double h = half_width(i);
+      if (h > 0 && std::abs(values[i] - r.center) <= h) sum2 += (values[i] - center) * (values[i] - center);
+    }
+    const double change = std::abs(center - r.center);
     r.center = center;
-    r.sigma = std::sqrt(sum2 / (n - 1) / truncated_variance);
+    r.sigma = gated ? std::sqrt(sum2 / (expected * (n - 1) / n)) : std::sqrt(sum2 / (n - 1) / ungated_variance);
+    if (gated && change < 1e-9) break;
   }
   return r;
 }
@@ -67,6 +100,11 @@ struct Residual {
   double size[3] = {0, 0, 0};                // h, w, l
   double yaw = 0.0;                          // modulo pi, rad
   bool has_position = false, has_size = false, has_yaw = false;
+  // The largest |along| and |across| a match gate let through (ground truth
+  // matched within a horizontal distance g: sqrt(g^2 - across^2) and
+  // sqrt(g^2 - along^2)); infinite without a gate.
+  double along_limit = std::numeric_limits<double>::infinity();
+  double across_limit = std::numeric_limits<double>::infinity();
 };
 
 // The unit horizontal ray through `position` (camera frame) and the horizontal direction across it.
@@ -133,42 +171,53 @@ bool FitLinear(const std::vector<std::pair<double, double>>& distance_sigma, con
 }
 
 // The position sigmas (per distance bin, then a + b d over the bins) and,
-// when `with_biases`, the biases.
+// when `with_biases`, the biases. The along-ray bias is the bins' centres
+// combined with the weights count / sigma(d)^2 of the fitted line at each
+// bin's mean distance (the inverse variances of the centres: far detections
+// err more, and pooling them with equal weights costs precision), over the
+// bins that enter the fit. Each bin's statistics keep their windows inside
+// the residuals' gates (Robust).
 void SummarisePosition(const std::vector<Residual>& residuals, const DetectorNoiseOptions& o, bool with_biases,
                        DetectorNoiseModel* model) {
-  std::vector<double> along_all;
   const size_t num_bins = o.bin_edges.size();
   std::vector<std::vector<double>> along(num_bins), across(num_bins), vertical(num_bins), distance(num_bins);
+  std::vector<std::vector<double>> along_limit(num_bins), across_limit(num_bins);
+  bool gated = false;
   for (const Residual& r : residuals) {
     if (!r.has_position) continue;
     ++model->num_position_samples;
     size_t bin = 0;
     while (bin + 1 < num_bins && r.distance >= o.bin_edges[bin + 1]) ++bin;
     along[bin].push_back(r.along), across[bin].push_back(r.across), vertical[bin].push_back(r.vertical);
+    along_limit[bin].push_back(r.along_limit), across_limit[bin].push_back(r.across_limit);
     distance[bin].push_back(r.distance);
-    along_all.push_back(r.along);
+    gated = gated || std::isfinite(r.along_limit) || std::isfinite(r.across_limit);
   }
   std::vector<std::pair<double, double>> fit_along, fit_across, fit_vertical;
   std::vector<int> fit_counts;
+  std::vector<double> fit_along_centers;
   for (size_t b = 0; b < num_bins; ++b) {
     if (along[b].empty()) continue;
     DistanceBin bin;
     bin.min_distance = o.bin_edges[b];
     bin.max_distance = b + 1 < num_bins ? o.bin_edges[b + 1] : 1e3;
     bin.count = static_cast<int>(along[b].size());
-    const RobustEstimate ea = Robust(along[b], o.trim_sigmas), ec = Robust(across[b], o.trim_sigmas),
+    const RobustEstimate ea = Robust(along[b], o.trim_sigmas, gated ? along_limit[b] : std::vector<double>()),
+                         ec = Robust(across[b], o.trim_sigmas, gated ? across_limit[b] : std::vector<double>()),
                          ev = Robust(vertical[b], o.trim_sigmas);
     bin.along_sigma = ea.sigma, bin.across_sigma = ec.sigma, bin.vertical_sigma = ev.sigma;
     if (with_biases) bin.along_bias = ea.center, bin.across_bias = ec.center, bin.vertical_bias = ev.center;
-    model->bins.push_back(bin);
-    if (bin.count < o.min_bin_count) continue;
     double mean_distance = 0;
     for (double d : distance[b]) mean_distance += d;
     mean_distance /= distance[b].size();
+    bin.mean_distance = mean_distance;
+    model->bins.push_back(bin);
+    if (bin.count < o.min_bin_count) continue;
     fit_along.push_back({mean_distance, bin.along_sigma});
     fit_across.push_back({mean_distance, bin.across_sigma});
     fit_vertical.push_back({mean_distance, bin.vertical_sigma});
     fit_counts.push_back(bin.count);
+    fit_along_centers.push_back(ea.center);
   }
   if (model->num_position_samples < o.min_samples || fit_counts.empty()) {
     std::ostringstream note;
@@ -179,7 +228,15 @@ void SummarisePosition(const std::vector<Residual>& residuals, const DetectorNoi
     FitLinear(fit_along, fit_counts, &model->along_sigma_a, &model->along_sigma_b);
     FitLinear(fit_across, fit_counts, &model->across_sigma_a, &model->across_sigma_b);
     FitLinear(fit_vertical, fit_counts, &model->vertical_sigma_a, &model->vertical_sigma_b);
-    if (with_biases) model->along_bias = Robust(along_all, o.trim_sigmas).center;
+    if (with_biases) {
+      double weighted = 0, weights = 0;
+      for (size_t i = 0; i < fit_counts.size(); ++i) {
+        const double sigma = model->along_sigma_a + model->along_sigma_b * fit_along[i].first;
+        const double w = fit_counts[i] / (sigma * sigma);
+        weighted += w * fit_along_centers[i], weights += w;
+      }
+      model->along_bias = weighted / weights;
+    }
   }
 }
 
@@ -582,9 +639,11 @@ int EstimateBoxConvention(const std::vector<BoxConventionSample>& samples, const
 
 DetectorNoiseModel EstimateDetectorNoiseFromTruth(const std::vector<MatchedDetection>& matches, int num_missed,
                                                   int num_false_positives, int num_frames,
-                                                  const DetectorNoiseOptions& o, const TrackerOptions& defaults) {
+                                                  const DetectorNoiseOptions& o, const TrackerOptions& defaults,
+                                                  double match_distance) {
   o.Check();
   defaults.Check();
+  SAMP_CHECK(match_distance > 0) << "EstimateDetectorNoiseFromTruth: match_distance must be > 0 (infinity: no gate)";
   SAMP_CHECK(num_missed >= 0 && num_false_positives >= 0 && num_frames >= 0)
       << "EstimateDetectorNoiseFromTruth: negative counts";
   DetectorNoiseModel model;
@@ -594,6 +653,10 @@ DetectorNoiseModel EstimateDetectorNoiseFromTruth(const std::vector<MatchedDetec
   for (const MatchedDetection& m : matches) {
     Residual r;
     Decompose(m.truth.position, m.detection.position - m.truth.position, &r);
+    if (std::isfinite(match_distance)) {
+      r.along_limit = std::sqrt(std::max(0.0, match_distance * match_distance - r.across * r.across));
+      r.across_limit = std::sqrt(std::max(0.0, match_distance * match_distance - r.along * r.along));
+    }
     r.size[0] = m.detection.height - m.truth.height;
     r.size[1] = m.detection.width - m.truth.width;
     r.size[2] = m.detection.length - m.truth.length;

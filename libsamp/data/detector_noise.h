@@ -24,6 +24,7 @@
 // checked when read and errors name the file and the key.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,9 @@ namespace samp {
 struct DistanceBin {
   double min_distance = 0.0, max_distance = 0.0;
   int count = 0;  // detections in the bin
+  // Their mean horizontal distance (m): where the bin's sigmas enter the
+  // a + b d fit. 0 = not recorded (a file written without it).
+  double mean_distance = 0.0;
   // Robust std. dev. and bias (median) of the position error (m).
   double along_sigma = 0.0, across_sigma = 0.0, vertical_sigma = 0.0;
   double along_bias = 0.0, across_bias = 0.0, vertical_bias = 0.0;
@@ -51,7 +55,8 @@ struct DetectorNoiseModel {
   double along_sigma_a = 0.25, along_sigma_b = 0.015;
   double across_sigma_a = 0.1, across_sigma_b = 0.005;
   double vertical_sigma_a = 0.2, vertical_sigma_b = 0.002;
-  // Median position error along the ray (m; ground truth only).
+  // Centre of the position error along the ray (m; ground truth only): the
+  // distance bins' robust centres weighted by their inverse variances.
   double along_bias = 0.0;
   // Per box dimension h, w, l: std. dev. and bias (detected - true, m).
   double size_sigma[3] = {0.3, 0.3, 0.3};
@@ -208,11 +213,15 @@ struct MatchedDetection {
 
 // Calibration against ground truth: `matches` are detections with their true
 // boxes, `num_missed` true boxes without a detection, `num_false_positives`
-// detections without a true box, over `num_frames` frames.
-DetectorNoiseModel EstimateDetectorNoiseFromTruth(const std::vector<MatchedDetection>& matches, int num_missed,
-                                                  int num_false_positives, int num_frames,
-                                                  const DetectorNoiseOptions& options,
-                                                  const TrackerOptions& defaults);
+// detections without a true box, over `num_frames` frames. `match_distance`:
+// the horizontal distance (m) within which the matches were made (infinity:
+// no gate). The gate cuts the error's tails, unevenly when the detector is
+// biased; the statistics keep their windows inside it, so the along-ray bias
+// and the far bins' sigmas are not pulled towards 0 by it.
+DetectorNoiseModel EstimateDetectorNoiseFromTruth(
+    const std::vector<MatchedDetection>& matches, int num_missed, int num_false_positives, int num_frames,
+    const DetectorNoiseOptions& options, const TrackerOptions& defaults,
+    double match_distance = std::numeric_limits<double>::infinity());
 
 // Self-calibrating tracking: link with robust cues (and `initial`'s sigmas),
 // estimate the noise model from all sequences, re-link with it, until the
@@ -253,15 +262,20 @@ TrackerOptions TrackerForModel(const TrackerOptions& initial, const DetectorNois
 CalibrationResult CalibrateTracker(const std::vector<std::vector<FrameDetections>>& frames_of_sequence,
                                    const TrackerOptions& initial, const CalibrationOptions& options);
 
-// `samp calibrate-detector`: the detections of sequence directories
-// (detections/, the sequence layout) matched to ground-truth tracking labels
+// `samp calibrate-detector`: the detections of sequences (their layout's, or
+// SequenceOptions::detections_path: e.g. a tracker's KITTI tracking result
+// file, whose track ids are ignored) matched to ground-truth tracking labels
 // (KITTI label_02 format) frame by frame: a minimum-cost assignment on the
 // horizontal distance of the bottom centres, pairs within match_distance.
 struct DetectorCalibrationOptions {
   std::vector<std::string> sequences;
-  // One KITTI tracking label file per sequence; empty = SEQ/gt/label_02/<seq>.txt.
+  // One KITTI tracking label file per sequence; empty = SEQ/gt/label_02/<seq>.txt
+  // (samp's layout) or ROOT/label_02/<seq>.txt (KITTI tracking's, ROOT/image_02/<seq>).
   std::vector<std::string> truth_labels;
-  SequenceOptions sequence;      // object types, minimum score, frame range
+  // Object types, minimum score, frame range and the detections:
+  // detections_path (a file only with one sequence, else a folder of
+  // <seq>.txt) and detection_format; tracking_labels_path must be empty.
+  SequenceOptions sequence;
   double match_distance = 3.0;   // m
   DetectorNoiseOptions noise;
   TrackerOptions defaults;       // the values of terms with too few samples
@@ -273,8 +287,9 @@ struct DetectorCalibrationSummary {
   std::string BriefReport() const;
 };
 
-// Throws samp::Error naming the file when a sequence or label file cannot be
-// read, a label file has labels in frames its sequence does not have
+// Throws samp::Error naming the file when a sequence, detection or label file
+// cannot be read (a malformed line, a wrong column count: file and line), a
+// label or detection file has entries in frames its sequence does not have
 // (mismatched files), or fewer than noise.min_samples detections match.
 DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& options,
                                               DetectorCalibrationSummary* summary = nullptr);

@@ -99,6 +99,7 @@ static void OptionFields(OptionsJson& io, DistanceBin& b) {
   io("min_distance", b.min_distance);
   io("max_distance", b.max_distance);
   io("count", b.count);
+  io.Optional("mean_distance", b.mean_distance, 0.0);
   io("along_sigma", b.along_sigma);
   io("across_sigma", b.across_sigma);
   io("vertical_sigma", b.vertical_sigma);
@@ -184,9 +185,14 @@ DetectorNoiseModel DetectorNoiseModelFromJson(const std::string& text, const std
       << DetectorNoiseModel::kVersion << ")";
   DetectorNoiseModel m;
   OptionsFromJson(f, &m);
-  for (size_t k = 0; k < m.bins.size(); ++k)
-    SAMP_CHECK(m.bins[k].count >= 0 && m.bins[k].max_distance >= m.bins[k].min_distance)
+  for (size_t k = 0; k < m.bins.size(); ++k) {
+    const DistanceBin& b = m.bins[k];
+    SAMP_CHECK(b.count >= 0 && b.max_distance >= b.min_distance)
         << source << ": distance_bins[" << k << "]: a distance bin needs count >= 0 and max_distance >= min_distance";
+    SAMP_CHECK(b.mean_distance == 0.0 || (b.mean_distance >= b.min_distance && b.mean_distance <= b.max_distance))
+        << source << ": distance_bins[" << k << "].mean_distance " << b.mean_distance << " is outside the bin ["
+        << b.min_distance << ", " << b.max_distance << "]";
+  }
   if (f.Has("box_convention")) {
     OptionsJson io(&f);
     io.NestedWith("box_convention", [&m](OptionsJson& box) { BoxConventionFields(box, m); });

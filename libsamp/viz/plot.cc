@@ -511,6 +511,9 @@ RgbImage DrawLinePlot(const std::vector<PlotSeries>& series, const LinePlotOptio
                                          << " y values";
     SAMP_CHECK(s.line_width >= 0 && s.marker_size >= 0)
         << "DrawLinePlot: series " << i << " has a negative line width or marker size";
+    SAMP_CHECK(s.point_labels.empty() || s.point_labels.size() == s.x.size())
+        << "DrawLinePlot: series " << i << " ('" << s.label << "') has " << s.point_labels.size()
+        << " point labels for " << s.x.size() << " points";
     bool previous_finite = false;
     for (size_t j = 0; j < s.x.size(); ++j) {
       const bool finite = std::isfinite(s.x[j]) && std::isfinite(s.y[j]);
@@ -540,6 +543,18 @@ RgbImage DrawLinePlot(const std::vector<PlotSeries>& series, const LinePlotOptio
               &frame.x_hi, &text.x_ticks, kDataPadding);
   ResolveAxis(y_range, options.y_min, options.y_max, options.max_ticks, "y", &frame.y_lo,
               &frame.y_hi, &text.y_ticks, kDataPadding);
+  // Point labels cover a box above their points: roughly, in data units (the
+  // plot's size in pixels is not laid out yet), for the legend's placement.
+  const double label_px = std::max(4.0, options.font_px - 3);
+  for (const PlotSeries& ps : series) {
+    for (size_t j = 0; j < ps.point_labels.size(); ++j) {
+      if (ps.point_labels[j].empty() || !std::isfinite(ps.x[j]) || !std::isfinite(ps.y[j])) continue;
+      const double up = (0.5 * ps.marker_size + 3 + 0.6 * label_px) / (0.7 * options.height) * (frame.y_hi - frame.y_lo);
+      const double half = 0.5 * TextWidth(ps.point_labels[j], label_px) / (0.8 * options.width) *
+                          (frame.x_hi - frame.x_lo);
+      for (double dx : {-half, 0.0, half}) occupied.push_back(cv::Point2d(ps.x[j] + dx, ps.y[j] + up));
+    }
+  }
   const LegendPosition legend_position = LayoutWithLegend(
       text, options.width, options.height, legend, options.legend, occupied, &frame);
 
@@ -570,6 +585,18 @@ RgbImage DrawLinePlot(const std::vector<PlotSeries>& series, const LinePlotOptio
     }
     flush();
     for (const auto& p : all) DrawMarker(&roi, p, ps.marker, ps.marker_size * s, color);
+  }
+  // Point labels on the whole canvas (not clipped to the plot), above their points.
+  for (size_t i = 0; i < series.size(); ++i) {
+    const PlotSeries& ps = series[i];
+    const Rgb color = ps.color ? *ps.color : PaletteColor(int(i));
+    for (size_t j = 0; j < ps.point_labels.size(); ++j) {
+      if (ps.point_labels[j].empty() || !std::isfinite(ps.x[j]) || !std::isfinite(ps.y[j])) continue;
+      const double above = 0.5 * ps.marker_size * s + 3 * s;
+      DrawText(&frame.canvas, ps.point_labels[j], int(std::lround(frame.Px(ps.x[j]))),
+               int(std::lround(frame.Py(ps.y[j]) - above)),
+               MakeTextStyle(label_px * s, HAlign::kCenter, VAlign::kBottom, false, color));
+    }
   }
   DrawLegend(legend, legend_position, &frame);
   return Finish(frame, options.width, options.height);

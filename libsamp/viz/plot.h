@@ -37,6 +37,9 @@ struct PlotSeries {
   bool dashed = false;
   Marker marker = Marker::kNone;
   double marker_size = 7.0;      // marker diameter, pixels
+  // Text above each point (e.g. its sample count), in the series' colour at
+  // the tick labels' size less 3 px; empty, or one per point ("" = none).
+  std::vector<std::string> point_labels;
 };
 
 struct LinePlotOptions {
@@ -54,8 +57,9 @@ struct LinePlotOptions {
   void Check() const;
 };
 
-// Throws samp::Error on invalid options, series with x.size() != y.size(), or
-// when no series has a finite point and the ranges are not all given.
+// Throws samp::Error on invalid options, series with x.size() != y.size() (or
+// point labels not one per point), or when no series has a finite point and
+// the ranges are not all given.
 RgbImage DrawLinePlot(const std::vector<PlotSeries>& series, const LinePlotOptions& options);
 
 // One group member of a bar plot: a value per category.

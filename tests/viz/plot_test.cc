@@ -116,6 +116,26 @@ TEST(Plot, BarPlot) {
   EXPECT_THROW(bad.Check(), Error);
 }
 
+// Point labels: text above each point in the series' colour; one per point.
+TEST(Plot, PointLabels) {
+  PlotSeries counts{"sigma", {15, 25, 35, 50}, {0.5, 0.7, 0.9, 1.2}};
+  counts.line_width = 0;
+  counts.marker = Marker::kCircle;
+  LinePlotOptions options;
+  options.y_min = 0, options.y_max = 1.6;
+  options.legend = LegendPosition::kNone;
+  const RgbImage plain = DrawLinePlot({counts}, options);
+  counts.point_labels = {"n=196", "n=381", "", "n=1123"};
+  const RgbImage labelled = DrawLinePlot({counts}, options);
+  // Text pixels in the series' colour (anti-aliased: not only the exact colour) above the points.
+  int changed = 0;
+  for (int y = 0; y < plain.height; ++y)
+    for (int x = 0; x < plain.width; ++x) changed += plain.At(x, y) != labelled.At(x, y);
+  EXPECT_GT(changed, 100);
+  counts.point_labels = {"n=1"};
+  EXPECT_THROW(DrawLinePlot({counts}, options), Error);
+}
+
 TEST(Plot, BadInput) {
   PlotSeries mismatched{"m", {1, 2}, {1}};
   EXPECT_THROW(DrawLinePlot({mismatched}, LinePlotOptions()), Error);
