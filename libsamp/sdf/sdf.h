@@ -104,7 +104,10 @@ struct SdfQuality {
 SdfQuality CheckSdfQuality(const Sdf& sdf, const AlignedBox& shape_box, const SdfQualityOptions& options);
 
 // Computes the SDF of `mesh` (object frame) from its scans. Single-threaded per
-// call unless `parallel` (TBB over z-slices).
+// call unless `parallel` (TBB over z-slices). Its working buffers (about 60
+// bytes per voxel plus the scan views' tables, ~60 KB per 400 x 400 view)
+// are kept in a process-wide pool for the next call (core/object_pool.h):
+// one set per call that ever ran at the same time, held until the process ends.
 Sdf ComputeSdf(const Mesh& mesh, const ScanResult& scan, const GridSpec& grid,
                const SdfOptions& options, bool parallel = false);
 
