@@ -117,6 +117,8 @@ struct EmbreeScene::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   int packet_size = 4;
+  // Bounds of every vertex of the scene (empty when it has none).
+  Eigen::AlignedBox3d bounds;
   std::mutex error_mutex;
   std::string error;  // first error reported by the callback since the last check
 
@@ -204,6 +206,7 @@ EmbreeScene::EmbreeScene(const std::vector<const Mesh*>& meshes) : impl_(std::ma
     for (int64_t v = 0; v < num_vertices; ++v) {
       const Eigen::Vector3f& p = mesh->vertices[v];
       SAMP_CHECK(p.allFinite()) << "EmbreeScene: mesh " << id << " has a non-finite vertex";
+      impl_->bounds.extend(p.cast<double>());
       vertices[3 * v + 0] = p.x();
       vertices[3 * v + 1] = p.y();
       vertices[3 * v + 2] = p.z();
@@ -249,6 +252,60 @@ void IntersectOrigin(RTCScene scene, const Eigen::Vector3f& origin,
       [&](int64_t i) -> RayHit& { return hits[i]; });
 }
 
+// The pixels [u_begin, u_end) x [v_begin, v_end) of a camera whose rays can
+// meet a box.
+struct PixelWindow {
+  int u_begin = 0, u_end = 0, v_begin = 0, v_end = 0;
+};
+
+// Every point of the box projects into the convex hull of its corners' images
+// when all corners are in front of the camera, so a ray that hits inside the
+// box passes through a pixel of their bounding rectangle; the rectangle is
+// widened by kMargin pixels, far beyond the rounding of the rays' directions.
+// A corner at or behind the camera plane gives the whole image; an empty box
+// gives an empty window.
+PixelWindow PixelsThatCanHit(const PinholeCamera& camera, const Eigen::Isometry3d& world_from_camera,
+                             const Eigen::AlignedBox3d& box) {
+  PixelWindow window;
+  if (box.isEmpty()) return window;
+  window.u_end = camera.width;
+  window.v_end = camera.height;
+  constexpr double kMargin = 2.0;
+  const Eigen::Isometry3d camera_from_world = world_from_camera.inverse();
+  double u_min = std::numeric_limits<double>::infinity(), u_max = -u_min;
+  double v_min = u_min, v_max = -u_min;
+  for (int c = 0; c < 8; ++c) {
+    const Eigen::Vector3d p = camera_from_world * box.corner(Eigen::AlignedBox3d::CornerType(c));
+    if (!(p.z() > 0.0)) return window;
+    const double u = camera.fx * p.x() / p.z() + camera.cx, v = camera.fy * p.y() / p.z() + camera.cy;
+    u_min = std::min(u_min, u), u_max = std::max(u_max, u);
+    v_min = std::min(v_min, v), v_max = std::max(v_max, v);
+  }
+  const auto clamp = [](double x, int limit) { return int(std::clamp(x, 0.0, double(limit))); };
+  window.u_begin = clamp(std::floor(u_min - kMargin), camera.width);
+  window.u_end = clamp(std::ceil(u_max + kMargin) + 1.0, camera.width);
+  window.v_begin = clamp(std::floor(v_min - kMargin), camera.height);
+  window.v_end = clamp(std::ceil(v_max + kMargin) + 1.0, camera.height);
+  return window;
+}
+
+// Emits the tile of rows [v0, v0 + kTileHeight) and columns [u0, u0 +
+// kTileWidth) of a cast packet (see TraceCamera).
+template <int N, typename Emit, typename RowEmit>
+void EmitTile(const typename Packet<N>::Type& packet, const float* z_per_t, int v0, int u0, int row_begin,
+              int row_end, int width, const Emit& emit, const RowEmit& row_emit) {
+  constexpr int kTw = Packet<N>::kTileWidth, kTh = Packet<N>::kTileHeight;
+  for (int dv = 0; dv < kTh && v0 + dv < row_end; ++dv) {
+    const int64_t index = int64_t(v0 + dv - row_begin) * width + u0;
+    // A whole tile row at once where the emitter can (row_emit returns true).
+    if (u0 + kTw <= width && row_emit(index, packet, z_per_t, dv)) continue;
+    for (int du = 0; du < kTw && u0 + du < width; ++du) {
+      const int j = dv * kTw + du;
+      emit(index + du, packet, j, z_per_t[j]);
+    }
+  }
+}
+
 // Casts one ray per pixel of rows [row_begin, row_end) in coherent tiles of
 // Packet<N>::kTileWidth x kTileHeight pixels; lanes outside the image are masked
 // off. The packet is filled in structure-of-arrays form, one SSE vector per
@@ -258,11 +315,12 @@ void IntersectOrigin(RTCScene scene, const Eigen::Vector3f& origin,
 // return true; otherwise (and for partial rows) emit(index, packet, lane,
 // z_per_t) is called per pixel. index = (v - row_begin) * width + u (of the
 // row's first pixel for row_emit); z_per_t is the camera z of the unit ray
-// direction (depth = t * z_per_t).
+// direction (depth = t * z_per_t). Tiles outside `window` are not cast: they
+// are emitted as misses.
 template <int N, typename Emit, typename RowEmit>
 void TraceCamera(RTCScene scene, const PinholeCamera& camera,
                  const Eigen::Isometry3d& world_from_camera, int row_begin, int row_end,
-                 const Emit& emit, const RowEmit& row_emit) {
+                 const PixelWindow& window, const Emit& emit, const RowEmit& row_emit) {
   using P = Packet<N>;
   constexpr int kTw = P::kTileWidth, kTh = P::kTileHeight;
   const Eigen::Matrix3f r = world_from_camera.linear().cast<float>();
@@ -288,9 +346,17 @@ void TraceCamera(RTCScene scene, const PinholeCamera& camera,
     packet.ray.id[j] = unsigned(j);
     packet.ray.flags[j] = 0;
     packet.hit.instID[0][j] = RTC_INVALID_GEOMETRY_ID;
+    packet.ray.tfar[j] = std::numeric_limits<float>::infinity();  // read for skipped tiles
+    z_per_t[j] = 1.f;
   }
   for (int v0 = row_begin; v0 < row_end; v0 += kTh) {
+    const bool rows_can_hit = v0 < window.v_end && v0 + kTh > window.v_begin;
     for (int u0 = 0; u0 < width; u0 += kTw) {
+      if (!rows_can_hit || u0 >= window.u_end || u0 + kTw <= window.u_begin) {
+        for (int j = 0; j < N; ++j) packet.hit.geomID[j] = RTC_INVALID_GEOMETRY_ID;
+        EmitTile<N>(packet, z_per_t, v0, u0, row_begin, row_end, width, emit, row_emit);
+        continue;
+      }
       const float x0 = (float(u0) - cx) * inv_fx, y0 = (float(v0) - cy) * inv_fy;
 #if defined(__SSE2__)
       if constexpr (kTw == 4) {
@@ -338,15 +404,7 @@ void TraceCamera(RTCScene scene, const PinholeCamera& camera,
         valid[j] = (u0 + du < width && v0 + dv < row_end) ? -1 : 0;
       }
       P::Intersect(valid, scene, &context, &packet);
-      for (int dv = 0; dv < kTh && v0 + dv < row_end; ++dv) {
-        const int64_t index = int64_t(v0 + dv - row_begin) * width + u0;
-        // A whole tile row at once where the emitter can (row_emit returns true).
-        if (u0 + kTw <= width && row_emit(index, packet, z_per_t, dv)) continue;
-        for (int du = 0; du < kTw && u0 + du < width; ++du) {
-          const int j = dv * kTw + du;
-          emit(index + du, packet, j, z_per_t[j]);
-        }
-      }
+      EmitTile<N>(packet, z_per_t, v0, u0, row_begin, row_end, width, emit, row_emit);
     }
   }
 }
@@ -354,8 +412,8 @@ void TraceCamera(RTCScene scene, const PinholeCamera& camera,
 template <int N>
 void IntersectCameraHits(RTCScene scene, const PinholeCamera& camera,
                          const Eigen::Isometry3d& world_from_camera, int row_begin, int row_end,
-                         RayHit* hits) {
-  TraceCamera<N>(scene, camera, world_from_camera, row_begin, row_end,
+                         const PixelWindow& window, RayHit* hits) {
+  TraceCamera<N>(scene, camera, world_from_camera, row_begin, row_end, window,
                  [&](int64_t index, const typename Packet<N>::Type& packet, int j, float) {
                    RayHit& hit = hits[index];
                    if (packet.hit.geomID[j] == RTC_INVALID_GEOMETRY_ID) {
@@ -373,9 +431,9 @@ void IntersectCameraHits(RTCScene scene, const PinholeCamera& camera,
 template <int N>
 void IntersectCameraBuffers(RTCScene scene, const PinholeCamera& camera,
                             const Eigen::Isometry3d& world_from_camera, int row_begin, int row_end,
-                            const EmbreeScene::ImageOutputs& out) {
+                            const PixelWindow& window, const EmbreeScene::ImageOutputs& out) {
   TraceCamera<N>(
-      scene, camera, world_from_camera, row_begin, row_end,
+      scene, camera, world_from_camera, row_begin, row_end, window,
       [&](int64_t index, const typename Packet<N>::Type& packet, int j, float z_per_t) {
         const bool hit = packet.hit.geomID[j] != RTC_INVALID_GEOMETRY_ID;
         if (out.depth) {
@@ -458,10 +516,11 @@ void EmbreeScene::IntersectCamera(const PinholeCamera& camera,
                                   const Eigen::Isometry3d& world_from_camera, int row_begin,
                                   int row_end, RayHit* hits) const {
   CheckCameraRows(camera, row_begin, row_end);
+  const PixelWindow window = PixelsThatCanHit(camera, world_from_camera, impl_->bounds);
   switch (impl_->packet_size) {
-    case 16: IntersectCameraHits<16>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits); break;
-    case 8: IntersectCameraHits<8>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits); break;
-    default: IntersectCameraHits<4>(impl_->scene, camera, world_from_camera, row_begin, row_end, hits); break;
+    case 16: IntersectCameraHits<16>(impl_->scene, camera, world_from_camera, row_begin, row_end, window, hits); break;
+    case 8: IntersectCameraHits<8>(impl_->scene, camera, world_from_camera, row_begin, row_end, window, hits); break;
+    default: IntersectCameraHits<4>(impl_->scene, camera, world_from_camera, row_begin, row_end, window, hits); break;
   }
   impl_->ThrowIfError("rtcIntersect");
 }
@@ -470,10 +529,11 @@ void EmbreeScene::IntersectCameraImage(const PinholeCamera& camera,
                                        const Eigen::Isometry3d& world_from_camera, int row_begin,
                                        int row_end, const ImageOutputs& outputs) const {
   CheckCameraRows(camera, row_begin, row_end);
+  const PixelWindow window = PixelsThatCanHit(camera, world_from_camera, impl_->bounds);
   switch (impl_->packet_size) {
-    case 16: IntersectCameraBuffers<16>(impl_->scene, camera, world_from_camera, row_begin, row_end, outputs); break;
-    case 8: IntersectCameraBuffers<8>(impl_->scene, camera, world_from_camera, row_begin, row_end, outputs); break;
-    default: IntersectCameraBuffers<4>(impl_->scene, camera, world_from_camera, row_begin, row_end, outputs); break;
+    case 16: IntersectCameraBuffers<16>(impl_->scene, camera, world_from_camera, row_begin, row_end, window, outputs); break;
+    case 8: IntersectCameraBuffers<8>(impl_->scene, camera, world_from_camera, row_begin, row_end, window, outputs); break;
+    default: IntersectCameraBuffers<4>(impl_->scene, camera, world_from_camera, row_begin, row_end, window, outputs); break;
   }
   impl_->ThrowIfError("rtcIntersect");
 }

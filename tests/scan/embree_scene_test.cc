@@ -160,5 +160,95 @@ TEST(EmbreeScene, OriginAndCameraPathsAgreeWithGeneralRays) {
   EXPECT_THROW(scene.IntersectCamera(camera, world_from_camera, 0, 24, tiled.data()), Error);
 }
 
+// The camera paths cast only the tiles whose pixels can see the scene's
+// bounding box. A scene with the same mesh plus a triangle behind the camera
+// (a box corner behind the camera plane: every tile is cast) must give the
+// same images, also where the box's silhouette lies on pixel centres.
+TEST(EmbreeScene, CameraPathsSkipOnlyTilesThatCannotHit) {
+  PinholeCamera camera;
+  camera.width = 61;  // not a multiple of any tile size
+  camera.height = 45;
+  camera.fx = camera.fy = 50;
+  camera.cx = 30;
+  camera.cy = 22;
+  const Mesh box = MakeBoxMesh(Eigen::Vector3d(-0.6, -0.4, -0.5), Eigen::Vector3d(0.6, 0.4, 0.5));
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  for (int pose = 0; pose < 12; ++pose) {
+    Eigen::Isometry3d world_from_camera = Eigen::Isometry3d::Identity();
+    if (pose > 0) {
+      world_from_camera.linear() =
+          Eigen::AngleAxisd(0.4 * unit(rng), Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized())
+              .toRotationMatrix();
+    }
+    // Pose 0 looks straight at the -z face from 5 m: its edges at x = +-0.6,
+    // y = +-0.4 project to u = 30 +- 6, v = 22 +- 4, on pixel centres.
+    world_from_camera.translation() =
+        world_from_camera.linear() * Eigen::Vector3d(0.5 * unit(rng) * (pose > 0), 0.3 * unit(rng) * (pose > 0),
+                                                     -4.5 - 1.5 * (pose == 0 ? 2.0 / 3.0 : std::abs(unit(rng))));
+    Mesh behind;
+    const Eigen::Vector3d back = world_from_camera * Eigen::Vector3d(0, 0, -1);
+    behind.vertices = {back.cast<float>(), (back + Eigen::Vector3d(0.01, 0, 0)).cast<float>(),
+                       (back + Eigen::Vector3d(0, 0.01, 0)).cast<float>()};
+    behind.triangles = {Eigen::Vector3i(0, 1, 2)};
+    const EmbreeScene culled(box);
+    const EmbreeScene everything(std::vector<const Mesh*>{&box, &behind});
+    const size_t n = size_t(camera.width) * camera.height;
+    std::vector<float> depth_culled(n), depth_all(n);
+    std::vector<int32_t> geometry_culled(n), geometry_all(n);
+    std::vector<Eigen::Vector3f> normal_culled(n), normal_all(n);
+    EmbreeScene::ImageOutputs out_culled, out_all;
+    out_culled.depth = depth_culled.data();
+    out_culled.geometry = geometry_culled.data();
+    out_culled.normal = normal_culled.data();
+    out_all.depth = depth_all.data();
+    out_all.geometry = geometry_all.data();
+    out_all.normal = normal_all.data();
+    // Rows in two bands, so that the window is met from a band's first row too.
+    culled.IntersectCameraImage(camera, world_from_camera, 0, 19, out_culled);
+    EmbreeScene::ImageOutputs rest = out_culled;
+    rest.depth += 19 * camera.width;
+    rest.geometry += 19 * camera.width;
+    rest.normal += 19 * camera.width;
+    culled.IntersectCameraImage(camera, world_from_camera, 19, camera.height, rest);
+    everything.IntersectCameraImage(camera, world_from_camera, 0, camera.height, out_all);
+    std::vector<RayHit> hits(n);
+    culled.IntersectCamera(camera, world_from_camera, 0, camera.height, hits.data());
+    int num_hits = 0;
+    for (size_t i = 0; i < n; ++i) {
+      ASSERT_EQ(geometry_culled[i], geometry_all[i]) << "pose " << pose << " pixel " << i;
+      ASSERT_EQ(hits[i].geometry, geometry_all[i]) << "pose " << pose << " pixel " << i;
+      if (geometry_all[i] < 0) {
+        ASSERT_TRUE(std::isinf(depth_culled[i]));
+        ASSERT_EQ(normal_culled[i], Eigen::Vector3f::Zero());
+        continue;
+      }
+      ++num_hits;
+      EXPECT_NEAR(depth_culled[i], depth_all[i], 1e-5);
+      // Where a ray meets an edge of the box, which face is reported depends
+      // on the order of traversal, which the extra triangle changes.
+      const int u = int(i % camera.width), v = int(i / camera.width);
+      const Eigen::Vector3d point =
+          world_from_camera * (double(depth_all[i]) * camera.Ray(u, v) / camera.Ray(u, v).z());
+      const int faces = ((point.cwiseAbs() - Eigen::Vector3d(0.6, 0.4, 0.5)).cwiseAbs().array() < 1e-3).count();
+      if (faces < 2) EXPECT_TRUE(normal_culled[i].isApprox(normal_all[i], 1e-5)) << pose << " " << i;
+    }
+    // The box fills part of the image only: most tiles are skipped.
+    EXPECT_GT(num_hits, 40) << "pose " << pose;
+    EXPECT_LT(num_hits, int(n) / 3) << "pose " << pose;
+  }
+  // A box around the camera: every tile is cast.
+  const Mesh room = MakeBoxMesh(Eigen::Vector3d(-3, -3, -3), Eigen::Vector3d(3, 3, 3));
+  const EmbreeScene inside(room);
+  std::vector<RayHit> hits(size_t(camera.width) * camera.height);
+  inside.IntersectCamera(camera, Eigen::Isometry3d::Identity(), 0, camera.height, hits.data());
+  for (const RayHit& hit : hits) ASSERT_TRUE(hit.Hit());
+  // An empty scene: every pixel misses.
+  const Mesh empty;
+  const EmbreeScene nothing(empty);
+  nothing.IntersectCamera(camera, Eigen::Isometry3d::Identity(), 0, camera.height, hits.data());
+  for (const RayHit& hit : hits) ASSERT_FALSE(hit.Hit());
+}
+
 }  // namespace
 }  // namespace samp
