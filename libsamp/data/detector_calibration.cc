@@ -13,6 +13,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/data/calibration_option_table.h"
 #include "libsamp/data/detector_noise.h"
+#include "libsamp/data/image_box.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/sequence_layout.h"
@@ -107,6 +108,10 @@ void DetectorCalibrationOptions::Check() const {
       << "DetectorCalibrationOptions.truth_labels: " << truth_labels.size() << " files for " << sequences.size()
       << " sequences (give none or one per sequence)";
   SAMP_CHECK(match_distance > 0) << "DetectorCalibrationOptions.match_distance must be > 0";
+  SAMP_CHECK(std::isfinite(dont_care_overlap) && dont_care_overlap >= 0 && dont_care_overlap <= 1)
+      << "DetectorCalibrationOptions.dont_care_overlap (--dont-care-overlap) must be in [0, 1] (the share of a "
+         "detection's 2D box inside DontCare regions), got "
+      << dont_care_overlap;
   std::error_code error;
   SAMP_CHECK(sequence.detections_path.empty() || sequences.size() == 1 ||
              std::filesystem::is_directory(sequence.detections_path, error))
@@ -125,6 +130,7 @@ std::string DetectorCalibrationSummary::BriefReport() const {
   std::ostringstream s;
   s << num_frames << " frames: " << num_detections << " detections, " << num_truths << " true boxes, "
     << num_matched << " matched";
+  if (num_dont_care_ignored > 0) s << ", " << num_dont_care_ignored << " unmatched in DontCare regions ignored";
   return s.str();
 }
 
@@ -164,6 +170,7 @@ DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& 
     // the detections the reader gives in the camera's.
     const Eigen::Vector3d camera_from_label_frame = -reader.label_frame_offset();
     std::map<int, std::vector<ObjectLabel>> truth_of_frame;
+    std::map<int, std::vector<Eigen::Vector4d>> dont_care_of_frame;  // 2D boxes in the left image, px
     std::map<int, int> index_of_frame;
     for (int i = 0; i < reader.num_frames(); ++i) index_of_frame[files.frames[i].frame] = i;
     auto in_range = [&](int frame) {
@@ -171,7 +178,13 @@ DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& 
              (options.sequence.last_frame < 0 || frame <= options.sequence.last_frame);
     };
     for (const ObjectLabel& label : ReadTrackingLabels(labels_path)) {
-      if (SameObjectType(label.type, "DontCare")) continue;
+      if (SameObjectType(label.type, "DontCare")) {
+        // Regions of the image that were not labelled; those of frames the sequence does not have are
+        // left out (a car's label there is an error below).
+        if (in_range(label.frame) && index_of_frame.count(label.frame) > 0)
+          dont_care_of_frame[label.frame].push_back(label.box_2d);
+        continue;
+      }
       bool kept = false;
       for (const std::string& type : options.sequence.object_types) kept = kept || SameObjectType(label.type, type);
       if (!kept || !in_range(label.frame)) continue;
@@ -196,9 +209,18 @@ DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& 
           if (horizontal <= options.match_distance) cost[size_t(r) * cols + c] = horizontal;
         }
       const std::vector<int> assignment = SolveAssignment(cost, rows, cols);
-      int matched = 0;
+      int matched = 0, ignored = 0;
+      const auto dont_care = dont_care_of_frame.find(frame);
       for (int r = 0; r < rows; ++r) {
-        if (assignment[r] < 0) continue;
+        if (assignment[r] < 0) {
+          // Without a true box: a false positive unless it lies in the frame's DontCare regions.
+          Eigen::Vector4d box;
+          if (dont_care != dont_care_of_frame.end() && ProjectBox(detections[r], reader.calibration().camera, &box)) {
+            const double share = AreaShareInside(box, dont_care->second);
+            if (share > 0 && share >= options.dont_care_overlap) ++ignored;
+          }
+          continue;
+        }
         MatchedDetection m;
         m.detection = detections[r];
         m.truth = truths[assignment[r]];
@@ -206,8 +228,9 @@ DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& 
         matches.push_back(m);
         ++matched;
       }
-      num_false_positives += rows - matched;
+      num_false_positives += rows - matched - ignored;
       num_missed += cols - matched;
+      result.num_dont_care_ignored += ignored;
     }
   }
   result.num_matched = int(matches.size());
@@ -215,8 +238,11 @@ DetectorNoiseModel CalibrateDetectorFromTruth(const DetectorCalibrationOptions& 
       << "calibrate-detector: only " << result.num_matched << " detection(s) match a true box within "
       << options.match_distance << " m (" << result.BriefReport() << "); at least " << options.noise.min_samples
       << " are needed: give more sequences, or check that the labels belong to the sequences";
-  return EstimateDetectorNoiseFromTruth(matches, num_missed, num_false_positives, result.num_frames, options.noise,
-                                        options.defaults, options.match_distance);
+  DetectorNoiseModel model = EstimateDetectorNoiseFromTruth(matches, num_missed, num_false_positives,
+                                                            result.num_frames, options.noise, options.defaults,
+                                                            options.match_distance);
+  model.num_dont_care_ignored = result.num_dont_care_ignored;
+  return model;
 }
 
 }  // namespace samp

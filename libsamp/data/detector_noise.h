@@ -94,6 +94,11 @@ struct DetectorNoiseModel {
   // tracks (or true cars), frames.
   int num_position_samples = 0, num_size_samples = 0, num_yaw_samples = 0;
   int num_tracks = 0, num_frames = 0;
+  // Ground truth only: detections without a true box that were not counted
+  // as false positives because they lie in a DontCare region of their frame
+  // (DetectorCalibrationOptions::dont_care_overlap). In the JSON as
+  // "samples.dont_care_ignored" only when not 0.
+  int num_dont_care_ignored = 0;
   std::vector<DistanceBin> bins;
   // Why a term kept its default ("too few ...").
   std::vector<std::string> notes;
@@ -267,6 +272,9 @@ CalibrationResult CalibrateTracker(const std::vector<std::vector<FrameDetections
 // file, whose track ids are ignored) matched to ground-truth tracking labels
 // (KITTI label_02 format) frame by frame: a minimum-cost assignment on the
 // horizontal distance of the bottom centres, pairs within match_distance.
+// A detection left without a true box is a false positive unless its box,
+// projected into the left image, lies in the frame's DontCare regions (KITTI
+// label_02's DontCare lines: image areas that were not labelled).
 struct DetectorCalibrationOptions {
   std::vector<std::string> sequences;
   // One KITTI tracking label file per sequence; empty = SEQ/gt/label_02/<seq>.txt
@@ -277,6 +285,11 @@ struct DetectorCalibrationOptions {
   // <seq>.txt) and detection_format; tracking_labels_path must be empty.
   SequenceOptions sequence;
   double match_distance = 3.0;   // m
+  // A detection without a true box is ignored (neither matched nor a false
+  // positive; counted in DetectorNoiseModel::num_dont_care_ignored) when at
+  // least this share of its projected 2D box, and some of it, lies inside
+  // the union of its frame's DontCare boxes; in [0, 1] (1: wholly inside).
+  double dont_care_overlap = 0.5;
   DetectorNoiseOptions noise;
   TrackerOptions defaults;       // the values of terms with too few samples
   void Check() const;            // throws samp::Error naming the field
@@ -284,6 +297,7 @@ struct DetectorCalibrationOptions {
 
 struct DetectorCalibrationSummary {
   int num_detections = 0, num_truths = 0, num_matched = 0, num_frames = 0;
+  int num_dont_care_ignored = 0;  // unmatched detections in DontCare regions (not false positives)
   std::string BriefReport() const;
 };
 

@@ -43,6 +43,8 @@ void CheckModel(const DetectorNoiseModel& m, const std::string& where) {
   share(m.flip_rate, "flip_rate");
   share(m.miss_rate, "miss_rate");
   non_negative(m.false_positives_per_frame, "false_positives_per_frame");
+  SAMP_CHECK(m.num_dont_care_ignored >= 0)
+      << where << ": 'samples.dont_care_ignored' must be >= 0, is " << m.num_dont_care_ignored;
 }
 
 }  // namespace
@@ -87,7 +89,9 @@ std::string DetectorNoiseModel::BriefReport() const {
       << ", yaw " << correlation[6] << (correlation_shared ? " (one value for all cues)" : "");
   s << "; flips "
     << 100 * flip_rate << " %, misses " << 100 * miss_rate << " %, " << false_positives_per_frame
-    << " false positives per frame; " << num_tracks << " tracks, " << num_frames << " frames";
+    << " false positives per frame";
+  if (num_dont_care_ignored > 0) s << " (" << num_dont_care_ignored << " detections in DontCare regions ignored)";
+  s << "; " << num_tracks << " tracks, " << num_frames << " frames";
   for (const std::string& n : notes) s << "; NOTE: " << n;
   return s.str();
 }
@@ -135,6 +139,7 @@ static void OptionFields(OptionsJson& io, DetectorNoiseModel& m) {
     samples("yaw", m.num_yaw_samples);
     samples("tracks", m.num_tracks);
     samples("frames", m.num_frames);
+    samples.Optional("dont_care_ignored", m.num_dont_care_ignored, 0);
   });
   io.Array("distance_bins", m.bins);
   io("notes", m.notes);

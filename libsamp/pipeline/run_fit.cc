@@ -528,8 +528,11 @@ RunFitSummary RunFit(const RunFitOptions& options) {
   config.model_components = model ? model->NumComponents() : 0;
   config.detector_model = tracks_file.detector_model;
   WriteFitConfig((fs::path(folder) / "config.json").string(), config);
-  if (summary.detector_model_used)
+  if (summary.detector_model_used) {
     WriteDetectorNoiseModel((fs::path(folder) / "detector_model.json").string(), summary.detector_model);
+    if (options.detector_plot && options.draw_detector_model)
+      options.draw_detector_model((fs::path(folder) / "detector_model.png").string(), summary.detector_model);
+  }
 
   int num_detections = 0;
   for (const auto& q : summary.sequences) num_detections += q.input.tracking.num_detections;

@@ -7,6 +7,8 @@
 //   OUT/tracks.json           per sequence and track: shape, poses, costs;
 //                             the run's detector model ("detector_model")
 //   OUT/config.json           effective options and model file
+//   OUT/detector_model.json   the run's detector model, when it used one,
+//                             and its plot detector_model.png (detector_plot)
 // Sequences and tracks run in parallel (TBB); a sequence or track that fails
 // is reported in the summary and skipped, the others complete. A failed
 // sequence writes no label file.
@@ -81,6 +83,18 @@ struct RunFitOptions {
   // used instead of the tracker's and the fit's detector sigmas and instead of
   // self-calibration; its box convention, when it has one, is applied too.
   std::string detector_model_path;
+  // Draw the detector model the run used (self-calibrated or read) as
+  // OUT/detector_model.png beside detector_model.json, through
+  // draw_detector_model (without it nothing is drawn). Written to config.json
+  // only when off.
+  bool detector_plot = true;
+  // Draws a detector model as a PNG file at `path` (`samp fit` and the Python
+  // bindings set viz/detector_noise_plot.h's WriteDetectorNoisePlot: the
+  // pipeline itself does not draw). Called with a path in the temporary
+  // output folder when detector_plot is on and the run used a detector model;
+  // if it throws, the run throws and output_dir stays as it was. Not written
+  // to config.json.
+  std::function<void(const std::string& path, const DetectorNoiseModel& model)> draw_detector_model;
 
   // Throws samp::Error naming the field and the rule it broke.
   void Check() const;

@@ -49,6 +49,12 @@ OptionTable<RunFitOptions> MakeRunFitTable() {
                 "(instead of --tracker-*-sigma and --self-calibrate)",
                 std::string())
       .ExistingFile();
+  // Written only when false: config.json before the plot had no key.
+  t.AddOptional("detector_plot", &O::detector_plot,
+                "Do not draw the run's detector model (self-calibrated or --detector-model) as "
+                "OUT/detector_model.png beside detector_model.json (docs/detector_calibration.md, \"The plot\")",
+                true)
+      .OffOnly();
   return t;
 }
 

@@ -42,6 +42,7 @@
 #include "libsamp/pipeline/run_fit.h"
 #include "libsamp/scan/canonical.h"
 #include "libsamp/sdf/surface.h"
+#include "libsamp/viz/detector_noise_plot.h"
 
 namespace py = pybind11;
 namespace fs = std::filesystem;
@@ -351,7 +352,11 @@ PYBIND11_MODULE(_samp, m) {
 
   m.def(
       "run_fit",
-      [](const RunFitOptions& options) {
+      [](RunFitOptions options) {
+        // OUT/detector_model.png as `samp fit` draws it.
+        options.draw_detector_model = [](const std::string& path, const DetectorNoiseModel& model) {
+          WriteDetectorNoisePlot(path, model);
+        };
         return SummaryDict(WithoutGil([&] { return RunFit(options); }));
       },
       py::arg("options"), "RunFit (pipeline/run_fit.h): `samp fit` as one call; returns its summary.");

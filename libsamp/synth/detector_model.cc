@@ -237,34 +237,6 @@ DetectorNoiseModel TrueDetectorNoiseModel(const DetectorModelOptions& o, double 
   return m;
 }
 
-bool ProjectBox(const ObjectLabel& label, const PinholeCamera& camera, Eigen::Vector4d* box_2d) {
-  const double c = std::cos(label.rotation_y), s = std::sin(label.rotation_y);
-  double x1 = 1e18, y1 = 1e18, x2 = -1e18, y2 = -1e18;
-  bool any = false;
-  for (int i = 0; i < 8; ++i) {
-    const double lx = (i & 1 ? 0.5 : -0.5) * label.length;
-    const double lz = (i & 2 ? 0.5 : -0.5) * label.width;
-    const double ly = (i & 4) ? -label.height : 0.0;
-    // camera_from_object = [R_y(ry) | position], R_y = [[c, 0, s], [0, 1, 0], [-s, 0, c]].
-    const Eigen::Vector3d p = label.position + Eigen::Vector3d(c * lx + s * lz, ly, -s * lx + c * lz);
-    if (p.z() < 0.1) continue;
-    const Eigen::Vector2d uv = camera.Project(p);
-    x1 = std::min(x1, uv.x());
-    y1 = std::min(y1, uv.y());
-    x2 = std::max(x2, uv.x());
-    y2 = std::max(y2, uv.y());
-    any = true;
-  }
-  if (!any) return false;
-  x1 = std::clamp(x1, 0.0, camera.width - 1.0);
-  x2 = std::clamp(x2, 0.0, camera.width - 1.0);
-  y1 = std::clamp(y1, 0.0, camera.height - 1.0);
-  y2 = std::clamp(y2, 0.0, camera.height - 1.0);
-  if (x2 - x1 < 2.0 || y2 - y1 < 2.0) return false;
-  *box_2d = Eigen::Vector4d(x1, y1, x2, y2);
-  return true;
-}
-
 std::vector<ObjectLabel> StereoDetectorModel::FalsePositives(int frame,
                                                              const std::vector<ClutterCandidate>& candidates,
                                                              const PinholeCamera& camera) {

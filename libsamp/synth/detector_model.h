@@ -21,6 +21,7 @@
 
 #include "libsamp/core/camera.h"
 #include "libsamp/data/detector_noise.h"
+#include "libsamp/data/image_box.h"
 #include "libsamp/data/track.h"
 
 namespace samp {
@@ -151,9 +152,5 @@ const std::vector<std::string>& DetectorProfileNames();
 // or distances.
 DetectorNoiseModel TrueDetectorNoiseModel(const DetectorModelOptions& options, double min_distance,
                                           double max_distance);
-
-// The 2D box of a 3D box label (projected corners, clipped to the image); false
-// when no corner lies in front of the camera or the box misses the image.
-bool ProjectBox(const ObjectLabel& label, const PinholeCamera& camera, Eigen::Vector4d* box_2d);
 
 }  // namespace samp

@@ -11,6 +11,7 @@
 #include <random>
 
 #include "libsamp/core/error.h"
+#include "libsamp/data/image_box.h"
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/data/kitti_tracking.h"
 #include "libsamp/data/sequence_layout.h"
@@ -410,6 +411,15 @@ TEST(DetectorNoiseModelFile, RoundTripAndClearErrors) {
   j = nlohmann::json::parse(m.ToJson());
   j["miss_rate"] = 1.5;
   test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"miss_rate"});
+  // samples.dont_care_ignored: optional (written only when not 0), read back, >= 0.
+  EXPECT_FALSE(nlohmann::json::parse(m.ToJson())["samples"].contains("dont_care_ignored"));
+  j = nlohmann::json::parse(m.ToJson());
+  j["samples"]["dont_care_ignored"] = 12;
+  const DetectorNoiseModel ignored = ReadDetectorNoiseModel(write(j.dump()));
+  EXPECT_EQ(ignored.num_dont_care_ignored, 12);
+  EXPECT_EQ(nlohmann::json::parse(ignored.ToJson())["samples"]["dont_care_ignored"], 12);
+  j["samples"]["dont_care_ignored"] = -1;
+  test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"detector.json", "samples.dont_care_ignored"});
   std::filesystem::remove_all(dir);
 }
 
@@ -647,6 +657,94 @@ TEST(DetectorCalibrationFromTruth, KittiTrackingResultFile) {
   several.sequence.detections_path = file;
   several.sequence.detection_format = "auto";
   test::ExpectError([&] { CalibrateDetectorFromTruth(several); }, {"0000.txt is a file, but 4 sequences"});
+  fs::remove_all(root);
+}
+
+// KITTI's DontCare regions (label_02 lines of type DontCare: 2D boxes of
+// image areas that were not labelled): a detection without a true box whose
+// projected 2D box lies in them (at least dont_care_overlap of its area) is
+// not a false positive but counted as ignored; one outside them, or too
+// little inside, still is; matched detections are not affected. Each of 20
+// frames gets three detections without a car: one wholly inside a DontCare
+// box, one 30 % inside, one far from any.
+TEST(DetectorCalibrationFromTruth, DetectionsInDontCareRegionsAreNotFalsePositives) {
+  namespace fs = std::filesystem;
+  const fs::path root = fs::temp_directory_path() / ("samp_calibrate_dont_care_" + std::to_string(::getpid()));
+  std::string labels;
+  DetectorCalibrationOptions o;
+  o.sequences = {WriteCalibrationSequence((root / "seq").string(), AllNoise(0.0), 20, &labels)};
+  DetectorCalibrationSummary plain;
+  const DetectorNoiseModel without = CalibrateDetectorFromTruth(o, &plain);
+  EXPECT_EQ(plain.num_dont_care_ignored, 0);
+  EXPECT_EQ(without.num_dont_care_ignored, 0);
+
+  const SequenceLayout layout(o.sequences[0], "0000");
+  const PinholeCamera camera = SequenceReader(o.sequences[0], SequenceOptions()).calibration().camera;
+  std::vector<ObjectLabel> truths = ReadTrackingLabels(labels);
+  // Far from every car (> 3 m, the match distance: 8 m or more), their image boxes apart.
+  auto stray = [](double x, double z) {
+    ObjectLabel d;
+    d.position = Eigen::Vector3d(x, 1.65, z);
+    d.height = kHeight, d.width = kWidth, d.length = kLength;
+    d.rotation_y = -M_PI / 2;
+    return d;
+  };
+  for (int f = 0; f < 20; ++f) {
+    std::vector<ObjectLabel> detections = ReadLabels(layout.Detections(f));
+    const ObjectLabel inside = stray(9.0, 25.0), partly = stray(-9.0, 30.0), outside = stray(12.0, 15.0);
+    Eigen::Vector4d inside_box, partly_box, outside_box;
+    ASSERT_TRUE(ProjectBox(inside, camera, &inside_box));
+    ASSERT_TRUE(ProjectBox(partly, camera, &partly_box));
+    ASSERT_TRUE(ProjectBox(outside, camera, &outside_box));
+    ASSERT_EQ(AreaShareInside(outside_box, {inside_box, partly_box}), 0.0);
+    ASSERT_EQ(AreaShareInside(partly_box, {inside_box}), 0.0);
+    detections.push_back(inside), detections.push_back(partly), detections.push_back(outside);
+    WriteLabels(layout.Detections(f), detections);
+    ObjectLabel dont_care;
+    dont_care.frame = f, dont_care.type = "DontCare";
+    dont_care.height = dont_care.width = dont_care.length = -1;
+    dont_care.position = Eigen::Vector3d(-1000, -1000, -1000);
+    dont_care.rotation_y = -10;
+    // Two adjacent boxes that together cover the first stray (the union counts) ...
+    const double middle = 0.5 * (inside_box[0] + inside_box[2]);
+    dont_care.box_2d = Eigen::Vector4d(inside_box[0] - 2, inside_box[1] - 2, middle, inside_box[3] + 2);
+    truths.push_back(dont_care);
+    dont_care.box_2d = Eigen::Vector4d(middle, inside_box[1] - 2, inside_box[2] + 2, inside_box[3] + 2);
+    truths.push_back(dont_care);
+    // ... and one the left 30 % of the second.
+    dont_care.box_2d = partly_box;
+    dont_care.box_2d[2] = partly_box[0] + 0.3 * (partly_box[2] - partly_box[0]);
+    truths.push_back(dont_care);
+  }
+  WriteTrackingLabels(labels, truths);
+
+  DetectorCalibrationSummary summary;
+  const DetectorNoiseModel m = CalibrateDetectorFromTruth(o, &summary);
+  EXPECT_EQ(summary.num_detections, plain.num_detections + 60);
+  EXPECT_EQ(summary.num_matched, plain.num_matched);
+  EXPECT_EQ(summary.num_truths, plain.num_truths);  // DontCare boxes are no cars
+  EXPECT_EQ(summary.num_dont_care_ignored, 20);
+  EXPECT_EQ(m.num_dont_care_ignored, 20);
+  EXPECT_NE(summary.BriefReport().find("20 unmatched in DontCare regions ignored"), std::string::npos)
+      << summary.BriefReport();
+  // The partly covered and the outside strays are false positives: 2 more per frame.
+  EXPECT_NEAR(m.false_positives_per_frame, without.false_positives_per_frame + 2.0, 1e-9);
+  EXPECT_EQ(nlohmann::json::parse(m.ToJson())["samples"]["dont_care_ignored"], 20);
+  // 30 % inside is enough at a lower threshold; at 1 only wholly covered boxes count.
+  o.dont_care_overlap = 0.25;
+  const DetectorNoiseModel lower = CalibrateDetectorFromTruth(o, &summary);
+  EXPECT_EQ(summary.num_dont_care_ignored, 40);
+  EXPECT_NEAR(lower.false_positives_per_frame, without.false_positives_per_frame + 1.0, 1e-9);
+  o.dont_care_overlap = 1.0;
+  CalibrateDetectorFromTruth(o, &summary);
+  EXPECT_EQ(summary.num_dont_care_ignored, 20);
+
+  // The option's range.
+  for (double bad : {-0.1, 1.5, std::nan("")}) {
+    o.dont_care_overlap = bad;
+    test::ExpectError([&] { CalibrateDetectorFromTruth(o); },
+                      {"DetectorCalibrationOptions.dont_care_overlap (--dont-care-overlap) must be in [0, 1]"});
+  }
   fs::remove_all(root);
 }
 

@@ -453,5 +453,69 @@ TEST(RunFitCalibration, DetectorModelFile) {
   EXPECT_EQ(TracksDetectorModel(runs + "/file_wins").at("origin"), "file");
 }
 
+// The detector model's plot goes through RunFitOptions::draw_detector_model
+// (the pipeline does not draw; `samp fit` sets viz's plot): called once with
+// OUT/detector_model.png in the temporary folder and the run's model, so the
+// file is part of the output; not called with detector_plot off (config.json
+// then says so, and only then) or without a model; a hook that throws leaves
+// the output as it was. Linking only: self-calibration runs all the same.
+TEST(RunFitCalibration, DetectorModelPlotHook) {
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = scene.Folder("detector_plot");
+  const std::string out = runs + "/out";
+  RunFitOptions o = Options("", {scene.sequences[0]}, out);
+  o.link_only = true;
+  std::vector<std::string> paths;
+  std::string drawn_model;
+  o.draw_detector_model = [&](const std::string& path, const DetectorNoiseModel& model) {
+    paths.push_back(path);
+    drawn_model = model.ToJson();
+    WriteTextFileAtomically(path, "plot of " + model.source + "\n");
+  };
+  const RunFitSummary first = RunFit(o);
+  ASSERT_TRUE(first.detector_model_used) << first.BriefReport();
+  ASSERT_EQ(paths.size(), 1u);
+  EXPECT_EQ(fs::path(paths[0]).filename(), "detector_model.png");
+  EXPECT_NE(fs::path(paths[0]).parent_path(), fs::path(out));  // the temporary folder
+  EXPECT_EQ(drawn_model, first.detector_model.ToJson());
+  EXPECT_EQ(Listing(out), (std::set<std::string>{kOutputFolderMarker, "config.json", "detector_model.json",
+                                                 "detector_model.png", "label_02",
+                                                 "label_02/" + scene.names[0] + ".txt", "tracks.json"}));
+  EXPECT_FALSE(ReadJsonFile(out + "/config.json").contains("detector_plot"));
+  EXPECT_TRUE(ReadFitConfig(out + "/config.json").options.detector_plot);
+
+  // Off: no call, no file; config.json records the option. The earlier run
+  // (its plot listed in its marker) is replaced.
+  o.detector_plot = false;
+  const RunFitSummary off = RunFit(o);
+  EXPECT_TRUE(off.replaced_previous_output);
+  EXPECT_EQ(paths.size(), 1u);
+  EXPECT_FALSE(fs::exists(out + "/detector_model.png"));
+  EXPECT_EQ(ReadJsonFile(out + "/config.json").at("detector_plot"), false);
+  EXPECT_FALSE(ReadFitConfig(out + "/config.json").options.detector_plot);
+
+  // No detector model (self-calibration off, no file): nothing to draw.
+  o.detector_plot = true;
+  o.self_calibrate = false;
+  RunFit(o);
+  EXPECT_EQ(paths.size(), 1u);
+  EXPECT_FALSE(fs::exists(out + "/detector_model.png"));
+  // No hook: no plot.
+  o.self_calibrate = true;
+  o.draw_detector_model = nullptr;
+  RunFit(o);
+  EXPECT_TRUE(fs::exists(out + "/detector_model.json"));
+  EXPECT_FALSE(fs::exists(out + "/detector_model.png"));
+
+  // A hook that throws: the run throws, the output stays as it was.
+  const std::set<std::string> before = Listing(out);
+  o.draw_detector_model = [](const std::string& path, const DetectorNoiseModel&) {
+    SAMP_THROW() << "cannot draw " << path;
+  };
+  test::ExpectError([&] { RunFit(o); }, {"cannot draw ", "detector_model.png"});
+  EXPECT_EQ(Listing(out), before);
+  EXPECT_TRUE(Temporaries(runs).empty());
+}
+
 }  // namespace
 }  // namespace samp

@@ -2,6 +2,7 @@
 127.0.0.1 started here (real TCP), and a LocalCluster. Outputs are compared byte for byte
 with `samp fit` on the same sequence; a worker killed mid-run must not change them."""
 
+import json
 import os
 import shutil
 import signal
@@ -109,7 +110,6 @@ def test_fit_on_scheduler_and_two_worker_processes(dask_cluster, tmp_path):
     assert p.returncode == 0, stderr
     assert "4 sequence(s) (0 failed), 4 track(s) fitted" in stdout
     assert sorted(os.listdir(out)) == sorted(names + ["batch_summary.json"])
-    import json
     with open(os.path.join(out, "batch_summary.json")) as f:
         summary = json.load(f)
     assert len({s["pid"] for s in summary["sequences"]}) == 2  # both worker processes fitted
@@ -209,13 +209,19 @@ def test_fit_of_a_kitti_tracking_folder_matches_samp_fit(tmp_path):
                            capture_output=True, text=True, timeout=TIMEOUT)
         assert r.returncode == 0, r.stderr
         assert_same_files(tree_bytes(os.path.join(aside, name)), tree_bytes(os.path.join(out, name)), name)
-    # --sequence picks, and is refused without a KITTI source.
+        assert os.path.isfile(os.path.join(aside, name, "detector_model.png"))  # drawn on the worker
+    # --sequence picks, and is refused without a KITTI source; --no-detector-plot as samp fit's.
     p = batch(["fit", "--scheduler", "local", "--workers", "1", "--out", str(tmp_path / "one"), "--model",
                shipped_model(), "--threads", "1", "--no-progress", "--kitti-tracking", root, "--sequence", "1",
-               "--detections", detections, "--set", "fit.em_iterations=0"])
+               "--detections", detections, "--set", "fit.em_iterations=0", "--no-detector-plot"])
     stdout, stderr = p.communicate(timeout=TIMEOUT)
     assert p.returncode == 0, stderr
     assert sorted(os.listdir(str(tmp_path / "one"))) == ["0001"]
+    one = os.path.join(str(tmp_path / "one"), "0001")
+    assert os.path.isfile(os.path.join(one, "detector_model.json"))
+    assert not os.path.exists(os.path.join(one, "detector_model.png"))
+    with open(os.path.join(one, "config.json")) as f:
+        assert json.load(f)["detector_plot"] is False
     p = batch(fit_args("local", root, str(tmp_path / "two")) + ["--sequence", "0001"])
     _, stderr = p.communicate(timeout=TIMEOUT)
     assert p.returncode == 2 and "--sequence names sequences of --kitti-tracking" in stderr
@@ -239,7 +245,6 @@ def write_box_obj(path, length, height, width):
 
 
 def test_train_on_a_local_cluster_matches_samp_train(tmp_path):
-    import json
 
     import numpy as np
 

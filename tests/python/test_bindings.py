@@ -171,6 +171,11 @@ def test_fit_sequence_on_the_real_kitti_frame(model):
     assert result.detector_model["model"]["source"] == "defaults"
     assert result.detector_model["model"]["samples"]["frames"] == 1
     assert result.detector_model["model"]["notes"]
+    # Its plot beside it (as samp fit draws it), unless detector_plot is off.
+    assert "detector_model.png" in result.files()
+    with open(os.path.join(result.folder, "detector_model.png"), "rb") as f:
+        assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+    assert "detector_plot" not in result.config
     # The sequence's stages: reading the frames and the fit took time, no stage
     # is negative, and together they are no more than the whole sequence.
     seq_summary = result.summary["sequences"][0]

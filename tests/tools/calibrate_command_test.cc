@@ -3,7 +3,8 @@
 // its plot beside it (a PNG OpenCV reads back, of the plot's size and not
 // blank), --plot and --no-plot, detections given as a tracker's KITTI
 // tracking result file (the same model as from detections/), and clear
-// errors for bad output paths (docs/detector_calibration.md).
+// errors for bad output paths and a bad --dont-care-overlap
+// (docs/detector_calibration.md).
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -149,6 +150,24 @@ TEST_F(CalibrateCommandTest, BadOutputPathsAreClearErrors) {
   // --plot and --no-plot together: a usage error.
   EXPECT_EQ(Run({"-o", (root_ / "m.json").string(), "--plot", (root_ / "p.png").string(), "--no-plot"}, &err), 2);
   EXPECT_EQ(err.rfind("samp: error: ", 0), 0u) << err;
+}
+
+// --dont-care-overlap is a share in [0, 1]: another value is a usage error
+// naming the option; a valid one changes nothing here (the labels have no
+// DontCare boxes), and the model has no samples.dont_care_ignored.
+TEST_F(CalibrateCommandTest, DontCareOverlapIsAShare) {
+  std::string err;
+  for (const char* bad : {"1.5", "-0.1", "half"}) {
+    EXPECT_EQ(Run({"-o", (root_ / "m.json").string(), "--no-plot", "--dont-care-overlap", bad}, &err), 2) << bad;
+    EXPECT_EQ(err.rfind("samp: error: ", 0), 0u) << err;
+    EXPECT_NE(err.find("--dont-care-overlap"), std::string::npos) << err;
+  }
+  EXPECT_FALSE(fs::exists(root_ / "m.json"));
+  ASSERT_EQ(Run({"-o", (root_ / "default.json").string(), "--no-plot"}, &err), 0) << err;
+  ASSERT_EQ(Run({"-o", (root_ / "whole.json").string(), "--no-plot", "--dont-care-overlap", "1"}, &err), 0) << err;
+  const std::string model = test::ReadText((root_ / "default.json").string());
+  EXPECT_EQ(test::ReadText((root_ / "whole.json").string()), model);
+  EXPECT_EQ(model.find("dont_care_ignored"), std::string::npos);
 }
 
 }  // namespace

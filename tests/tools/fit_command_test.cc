@@ -1,6 +1,7 @@
 // `samp fit` as a process on small synthetic sequences: exit status and the
-// one-line error when every track failed or two sequences share a name, and
-// SIGINT in the middle of a run (docs/reliability.md, "Text, JSON and outputs").
+// one-line error when every track failed or two sequences share a name, the
+// detector model's plot, and SIGINT in the middle of a run
+// (docs/reliability.md, "Text, JSON and outputs").
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -12,11 +13,14 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <thread>
 
 #include "libsamp/data/kitti_io.h"
 #include "libsamp/synth/synth.h"
+#include "libsamp/viz/detector_noise_plot.h"
 #include "tests/synth/test_scene.h"
 #include "tests/tools/samp_process.h"
 
@@ -108,6 +112,56 @@ TEST(FitCommand, TableOptionsAndDeprecatedNames) {
   const std::string table = test::ReadText(runs + "/help.out");
   EXPECT_EQ(table.rfind("| option | command line | default | rule | meaning |\n", 0), 0u) << table;
   EXPECT_NE(table.find("| em_iterations | `--em-iterations` | 1 | >= 0 |"), std::string::npos) << table;
+}
+
+// The plot of `samp calibrate-detector` (viz/detector_noise_plot.h) is read
+// back from `path`: a PNG of the plot's size.
+void ExpectDetectorModelPlot(const std::string& path) {
+  const std::string bytes = test::ReadText(path);
+  ASSERT_GT(bytes.size(), 8u) << path;
+  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8)) << path;
+  const cv::Mat image = cv::imread(path, cv::IMREAD_COLOR);
+  ASSERT_FALSE(image.empty()) << path;
+  const DetectorNoisePlotOptions plot;
+  EXPECT_EQ(image.cols, plot.Width());
+  EXPECT_EQ(image.rows, plot.Height());
+}
+
+// OUT/detector_model.png beside OUT/detector_model.json: the run's detector
+// model drawn as `samp calibrate-detector` draws it, self-calibrated (the
+// default) or read with --detector-model. --no-detector-plot writes none, and
+// config.json records the option only then.
+TEST(FitCommand, DetectorModelPlotBesideItsJson) {
+  const test::BoxCarScene& scene = TheScene();
+  const std::string runs = TheScene().Folder("detector_plot");
+  const std::string out = runs + "/out";
+  std::string err;
+  ASSERT_EQ(RunSamp({"fit", "--model", scene.model, "--seq", scene.sequences[0], "--out", out, "-q"}, runs + "/log",
+                    &err),
+            0)
+      << err;
+  ASSERT_TRUE(fs::exists(out + "/detector_model.json"));
+  ExpectDetectorModelPlot(out + "/detector_model.png");
+  EXPECT_FALSE(nlohmann::json::parse(test::ReadText(out + "/config.json")).contains("detector_plot"));
+
+  // A model read from a file is drawn too.
+  fs::copy_file(out + "/detector_model.json", runs + "/model.json", fs::copy_options::overwrite_existing);
+  const std::string from_file = runs + "/from_file";
+  ASSERT_EQ(RunSamp({"fit", "--seq", scene.sequences[0], "--out", from_file, "--link-only", "--detector-model",
+                     runs + "/model.json", "-q"},
+                    runs + "/log", &err),
+            0)
+      << err;
+  ExpectDetectorModelPlot(from_file + "/detector_model.png");
+
+  // --no-detector-plot: the model's JSON without its plot (replacing the earlier run).
+  ASSERT_EQ(RunSamp({"fit", "--seq", scene.sequences[0], "--out", out, "--link-only", "--no-detector-plot", "-q"},
+                    runs + "/log", &err),
+            0)
+      << err;
+  EXPECT_TRUE(fs::exists(out + "/detector_model.json"));
+  EXPECT_FALSE(fs::exists(out + "/detector_model.png"));
+  EXPECT_EQ(nlohmann::json::parse(test::ReadText(out + "/config.json")).at("detector_plot"), false);
 }
 
 // A batch where one sequence fails exits 1 (everything asked for was not

@@ -28,7 +28,8 @@ void RegisterCalibrateCommand(CLI::App* app) {
       "Measure a 3D car detector's noise model (position along/across the ray and vertical by distance,\n"
       "box dimensions with biases, yaw, flips, misses, false positives) from its detections (a sequence's\n"
       "detections/, or --detections: e.g. a tracker's KITTI tracking result file, its track ids ignored)\n"
-      "and ground-truth tracking labels (KITTI label_02); writes the JSON that\n"
+      "and ground-truth tracking labels (KITTI label_02; detections in its DontCare regions are not\n"
+      "false positives); writes the JSON that\n"
       "`samp fit --detector-model` reads and a PNG of the error against distance beside it\n"
       "(docs/detector_calibration.md).");
   const std::string input_group = "Input (docs/sequence_format.md)";
@@ -51,6 +52,12 @@ void RegisterCalibrateCommand(CLI::App* app) {
                       "A detection matches a true box within this horizontal distance, m")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  command->add_option("--dont-care-overlap", args->options.dont_care_overlap,
+                      "A detection without a true box is not counted as a false positive when at least this share "
+                      "(0-1) of its projected 2D box lies inside its frame's DontCare boxes (KITTI label_02); "
+                      "counted in the JSON's samples.dont_care_ignored")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
   command->add_option("-o,--out", args->out, "Detector model JSON to write")->required();
   CLI::Option* plot =
       command->add_option("--plot", args->plot,

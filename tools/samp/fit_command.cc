@@ -16,6 +16,7 @@
 #include "libsamp/data/sequence_option_table.h"
 #include "libsamp/data/tracker_option_table.h"
 #include "libsamp/fit/fit_option_table.h"
+#include "libsamp/viz/detector_noise_plot.h"
 #include "libsamp/viz/fit_pictures.h"
 #include "tools/samp/commands.h"
 #include "tools/samp/option_cli.h"
@@ -99,6 +100,10 @@ void RunFitCommand(const std::shared_ptr<RunFitOptions>& options, const std::sha
     };
     visuals->output_dir = options->output_dir;
   }
+  // OUT/detector_model.png: the plot `samp calibrate-detector` draws.
+  options->draw_detector_model = [](const std::string& path, const DetectorNoiseModel& model) {
+    WriteDetectorNoisePlot(path, model);
+  };
   const RunFitSummary summary = RunFit(*options);
   std::cout << summary.BriefReport() << std::endl;
   if (summary.kept_previous_output) {
@@ -122,7 +127,8 @@ void RegisterFitCommand(CLI::App* app) {
       "fit",
       "Fit shape (PCA SDF manifold) and trajectory of every tracked car in stereo sequences,\n"
       "with shape and motion priors (SAMP). Writes OUT/label_02/<seq>.txt (KITTI tracking\n"
-      "results), OUT/meshes/track_<id>.ply (+ _points.ply), OUT/tracks.json and OUT/config.json.\n"
+      "results), OUT/meshes/track_<id>.ply (+ _points.ply), OUT/tracks.json, OUT/config.json and\n"
+      "the detector model OUT/detector_model.json with its plot detector_model.png.\n"
       "A sequence or track that fails is reported and skipped; OUT holds this run only.\n"
       "See docs/fitting.md.");
   // RunFitOptions' own fields from its table (pipeline/run_fit_option_table.h),
@@ -167,7 +173,7 @@ void RegisterFitCommand(CLI::App* app) {
   const std::string calibration_group =
       "Self-calibration (CalibrationOptions; docs/detector_calibration.md, \"Options\")";
   AddTableOptions(command, CalibrationOptionTable().Bind(&o.calibration), "calibration-", calibration_group);
-  AddTableOptions(command, Only(run, {"detector_model", "link_only", "write_meshes"}), "", run_group);
+  AddTableOptions(command, Only(run, {"detector_model", "detector_plot", "link_only", "write_meshes"}), "", run_group);
   command->add_flag("--pictures", visuals->pictures,
                     "After the fit, draw PNG pictures per track and sequence into OUT/pictures/ "
                     "(mesh in the image, bird's-eye before/after, shape strip; docs/fitting.md)");

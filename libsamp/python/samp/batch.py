@@ -117,13 +117,15 @@ def fit_options_from_args(args):
         options.link_only = True
     if args.frames:
         options.sequence.first_frame, options.sequence.last_frame = _samp.parse_frame_range(args.frames)
-    if args.detections or args.detection_format:
-        # Optional fields of config.json (written only when given): set on the tree.
+    if args.detections or args.detection_format or args.no_detector_plot:
+        # Optional fields of config.json (written only when not the default): set on the tree.
         tree = json.loads(options.native.to_json())
         if args.detections:
             tree["sequence"]["detections"] = os.path.abspath(args.detections)
         if args.detection_format:
             tree["sequence"]["detection_format"] = args.detection_format
+        if args.no_detector_plot:
+            tree["detector_plot"] = False
         options.native.from_json(json.dumps(tree))
     if args.min_score is not None:
         options.sequence.min_detection_score = args.min_score
@@ -470,6 +472,7 @@ def build_parser():
     fit.add_argument("--no-meshes", action="store_true", help="as samp fit --no-meshes")
     fit.add_argument("--single-frame", action="store_true", help="as samp fit --single-frame")
     fit.add_argument("--link-only", action="store_true", help="as samp fit --link-only")
+    fit.add_argument("--no-detector-plot", action="store_true", help="as samp fit --no-detector-plot")
     fit.add_argument("--set", action="append", metavar="FIELD=VALUE",
                      help="any RunFitOptions field by its config.json path, value as JSON "
                           "(fit.em_iterations=2, sequence.tracker.min_track_length=1); repeatable")
