@@ -63,11 +63,18 @@ class JsonFields {
 //     io.Nested("noise", o.noise);   // calls OptionFields(io', o.noise)
 //   }
 // OptionsToJson(o) writes every field (the effective options of a run, for
-// its config.json); OptionsFromJson(fields, &o) reads every field back and
-// throws naming the file and key when one is missing.
+// its config.json; an Optional field only when it differs from its default,
+// or always with JsonDefaults::kWrite); OptionsFromJson(fields, &o) reads
+// every field back and throws naming the file and key when one is missing.
+// Whether a writer also writes the Optional fields that keep their default
+// (kOmit: files keep their bytes; kWrite: the whole struct, e.g. for an API
+// that lists every field).
+enum class JsonDefaults { kOmit, kWrite };
+
 class OptionsJson {
  public:
-  explicit OptionsJson(nlohmann::json* out) : out_(out) {}
+  explicit OptionsJson(nlohmann::json* out, JsonDefaults defaults = JsonDefaults::kOmit)
+      : out_(out), defaults_(defaults) {}
   explicit OptionsJson(const JsonFields* in) : in_(in) {}
 
   bool writing() const { return out_ != nullptr; }
@@ -88,7 +95,7 @@ class OptionsJson {
   template <typename T>
   void Optional(const std::string& key, T& value, const T& default_value) {
     if (writing()) {
-      if (!(value == default_value)) (*out_)[key] = value;
+      if (write_defaults() || !(value == default_value)) (*out_)[key] = value;
     } else {
       value = in_->Has(key) ? in_->Get<T>(key) : default_value;
     }
@@ -112,7 +119,7 @@ class OptionsJson {
   template <typename E, typename ToName, typename FromName>
   void OptionalNamed(const std::string& key, E& value, const E& default_value, ToName to_name, FromName from_name) {
     if (writing()) {
-      if (!(value == default_value)) Named(key, value, to_name, from_name);
+      if (write_defaults() || !(value == default_value)) Named(key, value, to_name, from_name);
     } else if (in_->Has(key)) {
       Named(key, value, to_name, from_name);
     } else {
@@ -131,12 +138,12 @@ class OptionsJson {
     if (writing()) {
       nlohmann::json child = nlohmann::json::object();
       nlohmann::json defaults = nlohmann::json::object();
-      OptionsJson child_io(&child);
+      OptionsJson child_io(&child, defaults_);
       OptionFields(child_io, options);
       S default_options{};
-      OptionsJson defaults_io(&defaults);
+      OptionsJson defaults_io(&defaults, defaults_);
       OptionFields(defaults_io, default_options);
-      if (child != defaults) (*out_)[key] = std::move(child);
+      if (write_defaults() || child != defaults) (*out_)[key] = std::move(child);
     } else if (in_->Has(key)) {
       Nested(key, options);
     } else {
@@ -150,7 +157,7 @@ class OptionsJson {
       nlohmann::json array = nlohmann::json::array();
       for (S& item : items) {
         nlohmann::json child = nlohmann::json::object();
-        OptionsJson io(&child);
+        OptionsJson io(&child, defaults_);
         OptionFields(io, item);
         array.push_back(std::move(child));
       }
@@ -170,7 +177,7 @@ class OptionsJson {
   void NestedWith(const std::string& key, Visit visit) {
     if (writing()) {
       nlohmann::json child = nlohmann::json::object();
-      OptionsJson io(&child);
+      OptionsJson io(&child, defaults_);
       visit(io);
       (*out_)[key] = std::move(child);
     } else {
@@ -181,14 +188,17 @@ class OptionsJson {
   }
 
  private:
+  bool write_defaults() const { return defaults_ == JsonDefaults::kWrite; }
+
   nlohmann::json* out_ = nullptr;
   const JsonFields* in_ = nullptr;
+  JsonDefaults defaults_ = JsonDefaults::kOmit;
 };
 
 template <typename S>
-nlohmann::json OptionsToJson(const S& options) {
+nlohmann::json OptionsToJson(const S& options, JsonDefaults defaults = JsonDefaults::kOmit) {
   nlohmann::json j = nlohmann::json::object();
-  OptionsJson io(&j);
+  OptionsJson io(&j, defaults);
   OptionFields(io, const_cast<S&>(options));  // the writer only reads the fields
   return j;
 }

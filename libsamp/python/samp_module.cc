@@ -63,7 +63,7 @@ auto WithoutGil(F&& f) {
 // An options struct whose fields are listed by OptionFields (core/json_fields.h).
 template <typename S>
 struct FieldTableCodec {
-  static std::string ToJson(const S& o) { return DumpJson(OptionsToJson(o)); }
+  static std::string ToJson(const S& o) { return DumpJson(OptionsToJson(o, JsonDefaults::kWrite)); }
   static S FromJson(const std::string& text, const std::string& source) {
     const nlohmann::json j = ParseJson(text, source);
     const JsonFields fields(j, source);

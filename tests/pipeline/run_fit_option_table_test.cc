@@ -78,6 +78,32 @@ TEST(RunFitOptionTable, JsonKeepsConfigJsonsKeys) {
   EXPECT_EQ(OptionsToJson(read), j);
 }
 
+// JsonDefaults::kWrite (the Python options objects) also writes the optional
+// fields at their default, nested ones included; reading it back gives the same
+// struct, and the file form (kOmit) is unchanged.
+TEST(RunFitOptionTable, JsonCanListEveryField) {
+  RunFitOptions o;
+  o.self_calibrate = false;  // the value that config.json omits
+  const nlohmann::json omitted = OptionsToJson(o);
+  const nlohmann::json every = OptionsToJson(o, JsonDefaults::kWrite);
+  for (const char* key : {"self_calibrate", "detector_model", "detector_plot", "calibration"}) {
+    EXPECT_FALSE(omitted.contains(key)) << key;
+    EXPECT_TRUE(every.contains(key)) << key;
+  }
+  EXPECT_EQ(every.at("detector_plot"), true);
+  EXPECT_TRUE(every.at("sequence").contains("detections"));
+  EXPECT_FALSE(omitted.at("sequence").contains("detections"));
+  for (auto it = omitted.begin(); it != omitted.end(); ++it) {
+    if (!it.value().is_object()) EXPECT_EQ(every.at(it.key()), it.value()) << it.key();
+  }
+  RunFitOptions read;
+  read.detector_plot = false;
+  read.self_calibrate = true;
+  OptionsFromJson(JsonFields(every, "options"), &read);
+  EXPECT_EQ(OptionsToJson(read), omitted);
+  EXPECT_EQ(OptionsToJson(read, JsonDefaults::kWrite), every);
+}
+
 // A list set from a command line: each value as given (a comma in a path stays).
 TEST(RunFitOptionTable, ListsTakeEachValueAsGiven) {
   RunFitOptions o;

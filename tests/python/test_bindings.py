@@ -107,6 +107,35 @@ def test_options_are_the_structs_fields():
     assert f.data_term in ("paper", "ray_depth", "ray-depth") or isinstance(f.data_term, str)
 
 
+def test_options_list_the_fields_that_config_json_omits_at_their_default():
+    # config.json holds some fields only when they differ from their default;
+    # the options objects list and set them all the same.
+    o = samp.RunFitOptions()
+    tree = o.to_dict()
+    assert tree["detector_plot"] is True and tree["self_calibrate"] is True and tree["detector_model"] == ""
+    assert "detections" in tree["sequence"]
+    o.detector_plot = False
+    o.sequence.detections = "dets"
+    assert o.detector_plot is False and o.sequence.detections == "dets"
+    assert samp.RunFitOptions().from_dict(o.to_dict()) == o
+
+
+def test_batch_options_take_the_optional_fields_from_flags_and_config(tmp_path):
+    from samp import batch
+    parser = batch.build_parser()
+    args = parser.parse_args(["fit", "--scheduler", "local", "--seq-root", str(tmp_path), "--out", str(tmp_path / "o"),
+                              "--model", "m.vdb", "--no-detector-plot", "--detections", "dets"])
+    o = batch.fit_options_from_args(args)
+    assert o.detector_plot is False
+    assert o.sequence.detections == os.path.abspath("dets")
+    config = tmp_path / "config.json"
+    config.write_text(json.dumps({"detector_plot": False, "self_calibrate": False, "fit": {"em_iterations": 2}}))
+    args = parser.parse_args(["fit", "--scheduler", "local", "--seq-root", str(tmp_path), "--out", str(tmp_path / "o"),
+                              "--model", "m.vdb", "--config", str(config)])
+    o = batch.fit_options_from_args(args)
+    assert o.detector_plot is False and o.self_calibrate is False and o.fit.em_iterations == 2
+
+
 def test_options_refuse_unknown_fields_and_wrong_types():
     o = samp.RunFitOptions()
     with pytest.raises(AttributeError, match="fit.no_such_field"):

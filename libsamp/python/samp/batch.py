@@ -102,7 +102,8 @@ def fit_options_from_args(args):
     if args.config:
         with open(args.config) as f:
             config = json.load(f)
-        for key in ("fit", "sequence", "num_threads", "write_meshes", "link_only", "model"):
+        for key in ("fit", "sequence", "num_threads", "write_meshes", "link_only", "model",
+                    "self_calibrate", "detector_model", "detector_plot", "calibration"):
             if key in config:
                 options.from_dict({key: config[key]})
     if args.model:
@@ -117,16 +118,12 @@ def fit_options_from_args(args):
         options.link_only = True
     if args.frames:
         options.sequence.first_frame, options.sequence.last_frame = _samp.parse_frame_range(args.frames)
-    if args.detections or args.detection_format or args.no_detector_plot:
-        # Optional fields of config.json (written only when not the default): set on the tree.
-        tree = json.loads(options.native.to_json())
-        if args.detections:
-            tree["sequence"]["detections"] = os.path.abspath(args.detections)
-        if args.detection_format:
-            tree["sequence"]["detection_format"] = args.detection_format
-        if args.no_detector_plot:
-            tree["detector_plot"] = False
-        options.native.from_json(json.dumps(tree))
+    if args.detections:
+        options.sequence.detections = os.path.abspath(args.detections)
+    if args.detection_format:
+        options.sequence.detection_format = args.detection_format
+    if args.no_detector_plot:
+        options.detector_plot = False
     if args.min_score is not None:
         options.sequence.min_detection_score = args.min_score
     if args.types:
