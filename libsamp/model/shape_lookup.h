@@ -110,9 +110,15 @@ class ShapeLookup {
   // clamping); the others, and non-finite ones, the general one.
   double EvaluateDenseValue(const double* phi, const double* point) const {
     DenseCell cell;
-    if (!LocateInside(point, &cell)) return EvaluateDense(phi, point, nullptr, nullptr);
+    if (!LocateInside(point, &cell)) return EvaluateDenseValueOutside(phi, point);
     return DenseAt(phi, cell, nullptr);
   }
+
+  // EvaluateDense(phi, point, nullptr, nullptr), bit for bit, without the
+  // derivatives' bookkeeping: the value at the nearest box point plus the
+  // distance to the box (NaN for a non-finite point). The ray marches'
+  // samples outside the box (a trace's first, at the box entry).
+  double EvaluateDenseValueOutside(const double* phi, const double* point) const;
 
   // Dense phi_z on the grid (D floats, GridSpec::Index order).
   std::vector<float> Dense(const Eigen::VectorXd& z) const;

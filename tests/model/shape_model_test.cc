@@ -299,13 +299,24 @@ TEST(ShapeLookup, CellLookupEqualsEvaluateDenseBitForBit) {
       const double value_only = lookup.EvaluateDenseValue(dense, p.data());
       EXPECT_EQ(std::memcmp(&value_only, &v_ref, sizeof v), 0) << p.transpose();
     }
+    // Around the box: the cell only inside it, and the value-only lookups
+    // (EvaluateDenseValue, EvaluateDenseValueOutside for the points outside)
+    // equal EvaluateDense's everywhere.
     ShapeLookup::DenseCell cell;
-    for (const Eigen::Vector3d& p : RandomPoints(grid, 0.5, 200, 10)) {
+    for (const Eigen::Vector3d& p : RandomPoints(grid, 0.5, 400, 10)) {
       const bool inside = (p.array() >= grid.MinCorner().array()).all() && (p.array() <= grid.MaxCorner().array()).all();
       EXPECT_EQ(lookup.LocateInside(p.data(), &cell), inside) << p.transpose();
+      const double v_ref = lookup.EvaluateDense(dense, p.data(), nullptr, nullptr);
+      const double v = lookup.EvaluateDenseValue(dense, p.data());
+      EXPECT_EQ(std::memcmp(&v, &v_ref, sizeof v), 0) << p.transpose();
+      if (!inside) {
+        const double v_outside = lookup.EvaluateDenseValueOutside(dense, p.data());
+        EXPECT_EQ(std::memcmp(&v_outside, &v_ref, sizeof v), 0) << p.transpose();
+      }
     }
     const double nan_point[3] = {std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0};
     EXPECT_FALSE(lookup.LocateInside(nan_point, &cell));
+    EXPECT_TRUE(std::isnan(lookup.EvaluateDenseValue(dense, nan_point)));
   }
 }
 
