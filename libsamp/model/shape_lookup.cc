@@ -7,6 +7,10 @@
 
 #include "libsamp/core/error.h"
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 namespace samp {
 
 namespace {
@@ -271,6 +275,100 @@ double ShapeLookup::EvaluateDense(const double* phi, const double* point, double
   for (int k = 0; k < 8; ++k) c[k] = phi[cell.index[k]];
   if (d_z) CodeGradientAnyR(cell, components_.data(), num_components_, d_z);
   return Interpolate(cell, c, inv_voxel_, d_point);
+}
+
+// CodeGradient's sums from a cell's first corner and fractions (the same
+// weights, corners and order); kR > 0 fixes R at compile time.
+template <int kR>
+inline void CodeGradientFromBase(const float* components, int num_components, int64_t base, int64_t nx,
+                                 int64_t nxy, const double* f, double* d_z) {
+  const int nr = kR > 0 ? kR : num_components;
+  const double fx = f[0], fy = f[1], fz = f[2];
+  const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
+  const double w[8] = {gx * gy * gz, fx * gy * gz, gx * fy * gz, fx * fy * gz,
+                       gx * gy * fz, fx * gy * fz, gx * fy * fz, fx * fy * fz};
+  const int64_t offsets[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
+  double acc[kR > 0 ? kR : 1];
+  double* out = kR > 0 ? acc : d_z;
+  for (int r = 0; r < nr; ++r) out[r] = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const float* row = components + size_t(base + offsets[k]) * size_t(nr);
+    for (int r = 0; r < nr; ++r) out[r] += w[k] * double(row[r]);
+  }
+  if (kR > 0) {
+    for (int r = 0; r < nr; ++r) d_z[r] = out[r];
+  }
+}
+
+#ifdef __SSE2__
+// CodeGradientFromBase<5> with R = 5 in two lanes of two and one scalar:
+// per lane the same products and sums in the same order, so the same bits.
+inline void CodeGradientFromBase5(const float* components, int64_t base, int64_t nx, int64_t nxy, const double* f,
+                                  double* d_z) {
+  const double fx = f[0], fy = f[1], fz = f[2];
+  const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
+  const double w[8] = {gx * gy * gz, fx * gy * gz, gx * fy * gz, fx * fy * gz,
+                       gx * gy * fz, fx * gy * fz, gx * fy * fz, fx * fy * fz};
+  const int64_t offsets[8] = {0, 1, nx, nx + 1, nxy, nxy + 1, nxy + nx, nxy + nx + 1};
+  __m128d acc01 = _mm_setzero_pd(), acc23 = _mm_setzero_pd();
+  double acc4 = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const float* row = components + size_t(base + offsets[k]) * 5;
+    const __m128d wk = _mm_set1_pd(w[k]);
+    const __m128d r01 = _mm_cvtps_pd(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(row))));
+    const __m128d r23 = _mm_cvtps_pd(_mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(row + 2))));
+    acc01 = _mm_add_pd(acc01, _mm_mul_pd(wk, r01));
+    acc23 = _mm_add_pd(acc23, _mm_mul_pd(wk, r23));
+    acc4 += w[k] * double(row[4]);
+  }
+  _mm_storeu_pd(d_z, acc01);
+  _mm_storeu_pd(d_z + 2, acc23);
+  d_z[4] = acc4;
+}
+#endif
+
+void ShapeLookup::CodeGradientAt(const DenseCell& cell, double* d_z) const {
+  const int64_t nx = grid_.dims.x(), nxy = nx * grid_.dims.y();
+  const float* w = components_.data();
+  switch (num_components_) {
+#ifdef __SSE2__
+    case 5: return CodeGradientFromBase5(w, cell.base, nx, nxy, cell.f, d_z);
+#else
+    case 5: return CodeGradientFromBase<5>(w, 5, cell.base, nx, nxy, cell.f, d_z);
+#endif
+    case 10: return CodeGradientFromBase<10>(w, 10, cell.base, nx, nxy, cell.f, d_z);
+    default: return CodeGradientFromBase<0>(w, num_components_, cell.base, nx, nxy, cell.f, d_z);
+  }
+}
+
+double ShapeLookup::EvaluateDenseValueOutside(const double* phi, const double* point) const {
+  // Locate's clamping and distance, then DenseAt's interpolation of the
+  // clamped point plus the distance (Interpolate's sum).
+  double q[3];
+  double outside_sq = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    q[a] = std::min(std::max(point[a], grid_.origin[a]), max_corner_[a]);
+    const double outside = point[a] - q[a];
+    outside_sq += outside * outside;
+  }
+  if (!std::isfinite(outside_sq)) return std::numeric_limits<double>::quiet_NaN();
+  const double distance = outside_sq > 0.0 ? std::sqrt(outside_sq) : 0.0;
+  int i0[3];
+  double f[3];
+  for (int a = 0; a < 3; ++a) {
+    const double u = (q[a] - grid_.origin[a]) * inv_voxel_;
+    const int i = std::min(std::max(int(u), 0), grid_.dims[a] - 2);
+    i0[a] = i;
+    f[a] = u - i;
+  }
+  const int64_t nx = grid_.dims.x(), nxy = nx * grid_.dims.y();
+  const double* c = phi + (i0[0] + nx * i0[1] + nxy * i0[2]);
+  const double fx = f[0], fy = f[1], fz = f[2];
+  const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
+  const double c00 = gx * c[0] + fx * c[1], c10 = gx * c[nx] + fx * c[nx + 1];
+  const double c01 = gx * c[nxy] + fx * c[nxy + 1], c11 = gx * c[nxy + nx] + fx * c[nxy + nx + 1];
+  const double c0 = gy * c00 + fy * c10, c1 = gy * c01 + fy * c11;
+  return gz * c0 + fz * c1 + distance;
 }
 
 const double* ShapeLookup::DenseCached(const double* z) const {

@@ -51,33 +51,74 @@ class ShapeLookup {
   // Same value and gradients as Evaluate(z, ..) up to rounding.
   double EvaluateDense(const double* phi, const double* point, double* d_point, double* d_z) const;
 
-  // EvaluateDense(phi, point, nullptr, nullptr), bit for bit, inlined: the
-  // ray marches' samples. Points inside the grid box take a short path (no
-  // clamping); the others, and non-finite ones, the general one.
-  double EvaluateDenseValue(const double* phi, const double* point) const {
+  // Where a point inside the grid box falls: the index of its cell's first
+  // corner (GridSpec::Index order) and the fractions inside the cell. One
+  // cell serves the value, d/dpoint and d/dz of the point (DenseAt,
+  // CodeGradientAt), so a caller that needs all of them locates it once.
+  struct DenseCell {
+    int64_t base;
+    double f[3];
+  };
+
+  // The cell of `point` when it lies inside the grid box (false otherwise,
+  // and for non-finite points: those take EvaluateDense's general path).
+  bool LocateInside(const double* point, DenseCell* cell) const {
     const double* lo = grid_.origin.data();
     const double* hi = max_corner_.data();
     if (!(point[0] >= lo[0] && point[0] <= hi[0] && point[1] >= lo[1] && point[1] <= hi[1] && point[2] >= lo[2] &&
           point[2] <= hi[2])) {
-      return EvaluateDense(phi, point, nullptr, nullptr);
+      return false;
     }
     int i0[3];
-    double f[3];
     for (int a = 0; a < 3; ++a) {
       const double u = (point[a] - lo[a]) * inv_voxel_;
       const int i = std::min(std::max(int(u), 0), grid_.dims[a] - 2);
       i0[a] = i;
-      f[a] = u - i;
+      cell->f[a] = u - i;
     }
     const int64_t nx = grid_.dims.x(), nxy = nx * grid_.dims.y();
-    const double* c = phi + (i0[0] + nx * i0[1] + nxy * i0[2]);
-    const double fx = f[0], fy = f[1], fz = f[2];
+    cell->base = i0[0] + nx * i0[1] + nxy * i0[2];
+    return true;
+  }
+
+  // EvaluateDense(phi, point, d_point, nullptr) of a point inside the grid
+  // box, bit for bit, from its cell (LocateInside); null d_point: the value only.
+  double DenseAt(const double* phi, const DenseCell& cell, double* d_point) const {
+    const int64_t nx = grid_.dims.x(), nxy = nx * grid_.dims.y();
+    const double* c = phi + cell.base;
+    const double fx = cell.f[0], fy = cell.f[1], fz = cell.f[2];
     const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
     const double c00 = gx * c[0] + fx * c[1], c10 = gx * c[nx] + fx * c[nx + 1];
     const double c01 = gx * c[nxy] + fx * c[nxy + 1], c11 = gx * c[nxy + nx] + fx * c[nxy + nx + 1];
     const double c0 = gy * c00 + fy * c10, c1 = gy * c01 + fy * c11;
+    if (d_point) {
+      d_point[2] = (c1 - c0) * inv_voxel_;
+      d_point[1] = (gz * (c10 - c00) + fz * (c11 - c01)) * inv_voxel_;
+      d_point[0] = (gz * (gy * (c[1] - c[0]) + fy * (c[nx + 1] - c[nx])) +
+                    fz * (gy * (c[nxy + 1] - c[nxy]) + fy * (c[nxy + nx + 1] - c[nxy + nx]))) *
+                   inv_voxel_;
+    }
     return gz * c0 + fz * c1 + 0.0;  // + the distance to the box, 0 inside (as EvaluateDense)
   }
+
+  // EvaluateDense's d/dz (R values) of a point inside the grid box, bit for
+  // bit, from its cell: the trilinear weights on the 8 corners' rows of W.
+  void CodeGradientAt(const DenseCell& cell, double* d_z) const;
+
+  // EvaluateDense(phi, point, nullptr, nullptr), bit for bit, inlined: the
+  // ray marches' samples. Points inside the grid box take a short path (no
+  // clamping); the others, and non-finite ones, the general one.
+  double EvaluateDenseValue(const double* phi, const double* point) const {
+    DenseCell cell;
+    if (!LocateInside(point, &cell)) return EvaluateDenseValueOutside(phi, point);
+    return DenseAt(phi, cell, nullptr);
+  }
+
+  // EvaluateDense(phi, point, nullptr, nullptr), bit for bit, without the
+  // derivatives' bookkeeping: the value at the nearest box point plus the
+  // distance to the box (NaN for a non-finite point). The ray marches'
+  // samples outside the box (a trace's first, at the box entry).
+  double EvaluateDenseValueOutside(const double* phi, const double* point) const;
 
   // Dense phi_z on the grid (D floats, GridSpec::Index order).
   std::vector<float> Dense(const Eigen::VectorXd& z) const;

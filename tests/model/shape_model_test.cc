@@ -7,8 +7,10 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 
 #include "libsamp/core/error.h"
@@ -260,6 +262,61 @@ TEST(ShapeLookup, DenseCacheFollowsTheCodeAndTheLookup) {
                                   std::make_pair(&a, z2), std::make_pair(&b, z1)}) {
     const double* dense = lookup->DenseCached(z.data());
     EXPECT_NEAR(lookup->EvaluateDense(dense, p.data(), nullptr, nullptr), lookup->Evaluate(z, p), 1e-12);
+  }
+}
+
+TEST(ShapeLookup, CellLookupEqualsEvaluateDenseBitForBit) {
+  // R = 3 (the general kernel), 5 and 10 (compile-time kernels); random
+  // points inside the box, points on cell and box faces and the box's
+  // corners; points outside the box (and non-finite ones) have no cell.
+  for (const int r : {3, 5, 10}) {
+    const ShapeModel model = RandomModel(r, 40 + unsigned(r));
+    const ShapeLookup lookup(model);
+    Eigen::VectorXd z(r);
+    for (int i = 0; i < r; ++i) z[i] = 0.3 * (i + 1) * (i % 2 ? -1.0 : 1.0);
+    const double* dense = lookup.DenseCached(z.data());
+    const GridSpec& grid = lookup.grid();
+    std::vector<Eigen::Vector3d> points = RandomPoints(grid, 0.0, 300, 9);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        for (int k = 0; k < 3; ++k) {
+          points.push_back(grid.Position(i * (grid.dims.x() - 1) / 2, j * (grid.dims.y() - 1) / 2,
+                                         k * (grid.dims.z() - 1) / 2));
+        }
+    points.push_back(grid.MaxCorner());
+    points.push_back(grid.MinCorner());
+    for (const Eigen::Vector3d& p : points) {
+      ShapeLookup::DenseCell cell;
+      ASSERT_TRUE(lookup.LocateInside(p.data(), &cell)) << p.transpose();
+      double g_ref[3], g[3];
+      std::vector<double> dz_ref(static_cast<size_t>(r)), dz(static_cast<size_t>(r));
+      const double v_ref = lookup.EvaluateDense(dense, p.data(), g_ref, dz_ref.data());
+      const double v = lookup.DenseAt(dense, cell, g);
+      lookup.CodeGradientAt(cell, dz.data());
+      EXPECT_EQ(std::memcmp(&v, &v_ref, sizeof v), 0) << p.transpose();
+      EXPECT_EQ(std::memcmp(g, g_ref, sizeof g), 0) << p.transpose();
+      EXPECT_EQ(std::memcmp(dz.data(), dz_ref.data(), dz.size() * sizeof(double)), 0) << p.transpose();
+      const double value_only = lookup.EvaluateDenseValue(dense, p.data());
+      EXPECT_EQ(std::memcmp(&value_only, &v_ref, sizeof v), 0) << p.transpose();
+    }
+    // Around the box: the cell only inside it, and the value-only lookups
+    // (EvaluateDenseValue, EvaluateDenseValueOutside for the points outside)
+    // equal EvaluateDense's everywhere.
+    ShapeLookup::DenseCell cell;
+    for (const Eigen::Vector3d& p : RandomPoints(grid, 0.5, 400, 10)) {
+      const bool inside = (p.array() >= grid.MinCorner().array()).all() && (p.array() <= grid.MaxCorner().array()).all();
+      EXPECT_EQ(lookup.LocateInside(p.data(), &cell), inside) << p.transpose();
+      const double v_ref = lookup.EvaluateDense(dense, p.data(), nullptr, nullptr);
+      const double v = lookup.EvaluateDenseValue(dense, p.data());
+      EXPECT_EQ(std::memcmp(&v, &v_ref, sizeof v), 0) << p.transpose();
+      if (!inside) {
+        const double v_outside = lookup.EvaluateDenseValueOutside(dense, p.data());
+        EXPECT_EQ(std::memcmp(&v_outside, &v_ref, sizeof v), 0) << p.transpose();
+      }
+    }
+    const double nan_point[3] = {std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0};
+    EXPECT_FALSE(lookup.LocateInside(nan_point, &cell));
+    EXPECT_TRUE(std::isnan(lookup.EvaluateDenseValue(dense, nan_point)));
   }
 }
 

@@ -12,12 +12,19 @@ namespace samp {
 struct RayDepthCost::Batch {
   int first = 0, count = 0;
   double o[kRayBatch][3], phi[kRayBatch], u[kRayBatch][3];
+  // The cell of o (o_in_cell: o lies inside the grid box), for the
+  // derivatives at o of the rows without a crossing.
+  ShapeLookup::DenseCell o_cell[kRayBatch];
+  bool o_in_cell[kRayBatch];
   // The points off the surface (RayDistances): query k is point near_rows[k].
   RayDistanceQuery near[kRayBatch];
   int near_rows[kRayBatch], num_near = 0;
-  // A crossing found: the distance to it, the crossing and grad phi there.
+  // A crossing found: the distance to it, the crossing and grad phi there,
+  // its cell (crossing_in_cell: inside the grid box) for d/dz there.
   bool found[kRayBatch] = {};
   double distance[kRayBatch], crossing[kRayBatch][3], g_crossing[kRayBatch][3];
+  ShapeLookup::DenseCell crossing_cell[kRayBatch];
+  bool crossing_in_cell[kRayBatch];
   // Outside points without a crossing within reach (FirstCrossings): query k
   // is point far_rows[k], li its distance from the camera.
   double li[kRayBatch];
@@ -51,7 +58,9 @@ bool RayDepthCost::StartBatch(const PoseFrame& at, const double* pose, Batch* ba
     PointInObject(i, pose, at.c, at.s, rays.o[b]);
     // phi at the point first; its derivatives there only when the residual
     // stays phi (no crossing along the ray): most rows take them at the crossing.
-    rays.phi[b] = lookup_->EvaluateDenseValue(at.phi_z, rays.o[b]);
+    rays.o_in_cell[b] = lookup_->LocateInside(rays.o[b], &rays.o_cell[b]);
+    rays.phi[b] = rays.o_in_cell[b] ? lookup_->DenseAt(at.phi_z, rays.o_cell[b], nullptr)
+                                    : lookup_->EvaluateDense(at.phi_z, rays.o[b], nullptr, nullptr);
     if (!std::isfinite(rays.phi[b])) return false;
     RayInObject(i, at.c, at.s, rays.u[b]);
     if (rays.phi[b] == 0.0) continue;  // on the surface: phi and its derivatives at the point
@@ -82,6 +91,8 @@ void RayDepthCost::FindNearCrossings(const PoseFrame& at, Batch* batch) const {
         rays.crossing[b][a] = q.c[a];
         rays.g_crossing[b][a] = q.g_c[a];
       }
+      rays.crossing_cell[b] = q.cell;
+      rays.crossing_in_cell[b] = q.in_cell;
     } else if (rays.phi[b] > 0.0) {
       const double* o = rays.o[b];
       rays.li[b] = std::sqrt((o[0] - at.o_cam[0]) * (o[0] - at.o_cam[0]) +
@@ -112,6 +123,8 @@ void RayDepthCost::FindFarCrossings(const PoseFrame& at, Batch* batch) const {
       rays.crossing[b][a] = f.c[a];
       rays.g_crossing[b][a] = f.g_c[a];
     }
+    rays.crossing_cell[b] = f.cell;
+    rays.crossing_in_cell[b] = f.in_cell;
   }
 }
 
@@ -134,10 +147,19 @@ void RayDepthCost::WriteRows(const PoseFrame& at, int begin, Batch* batch, doubl
         g[a] = g_c[a] * m;
       }
       if (dz_row) {
-        lookup_->EvaluateDense(at.phi_z, rays.crossing[b], nullptr, dz_row);
+        // The crossing's cell from its last Newton step (EvaluateDense's d/dz, bit for bit).
+        if (rays.crossing_in_cell[b]) {
+          lookup_->CodeGradientAt(rays.crossing_cell[b], dz_row);
+        } else {
+          lookup_->EvaluateDense(at.phi_z, rays.crossing[b], nullptr, dz_row);
+        }
         for (int r = 0; r < at.nr; ++r) dz_row[r] *= m;
       }
       value = rays.phi[b] < 0.0 ? -rays.distance[b] : rays.distance[b];
+    } else if (rays.o_in_cell[b]) {
+      // The point's cell from StartBatch (EvaluateDense's derivatives, bit for bit).
+      if (jp) lookup_->DenseAt(at.phi_z, rays.o_cell[b], g);
+      if (dz_row) lookup_->CodeGradientAt(rays.o_cell[b], dz_row);
     } else if (jp || dz_row) {
       lookup_->EvaluateDense(at.phi_z, rays.o[b], jp ? g : nullptr, dz_row);
     }

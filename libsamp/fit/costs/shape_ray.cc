@@ -24,66 +24,28 @@ void PointOnRay(const double* origin, const double* direction, double t, double*
   for (int a = 0; a < 3; ++a) p[a] = origin[a] + t * direction[a];
 }
 
-// lookup.EvaluateDense(phi_z, p, g, nullptr), bit for bit, with a short
-// inlined path for points inside the grid box (the general one for the others
-// and for non-finite points): the value and gradient of the Newton steps.
-class DenseGradient {
- public:
-  explicit DenseGradient(const ShapeLookup& lookup)
-      : lookup_(lookup),
-        lo_(lookup.grid().MinCorner()),
-        hi_(lookup.grid().MaxCorner()),
-        inv_voxel_(1.0 / lookup.grid().voxel_size),
-        nx_(lookup.grid().dims.x()),
-        nxy_(int64_t(lookup.grid().dims.x()) * lookup.grid().dims.y()) {}
-
-  double operator()(const double* phi, const double* point, double* g) const {
-    if (!(point[0] >= lo_[0] && point[0] <= hi_[0] && point[1] >= lo_[1] && point[1] <= hi_[1] &&
-          point[2] >= lo_[2] && point[2] <= hi_[2])) {
-      return lookup_.EvaluateDense(phi, point, g, nullptr);
-    }
-    int i0[3];
-    double f[3];
-    for (int a = 0; a < 3; ++a) {
-      const double u = (point[a] - lo_[a]) * inv_voxel_;
-      const int i = std::min(std::max(int(u), 0), lookup_.grid().dims[a] - 2);
-      i0[a] = i;
-      f[a] = u - i;
-    }
-    const double* p = phi + (i0[0] + nx_ * i0[1] + nxy_ * i0[2]);
-    const double c[8] = {p[0], p[1], p[nx_], p[nx_ + 1], p[nxy_], p[nxy_ + 1], p[nxy_ + nx_], p[nxy_ + nx_ + 1]};
-    const double fx = f[0], fy = f[1], fz = f[2];
-    const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
-    const double c00 = gx * c[0] + fx * c[1], c10 = gx * c[2] + fx * c[3];
-    const double c01 = gx * c[4] + fx * c[5], c11 = gx * c[6] + fx * c[7];
-    const double c0 = gy * c00 + fy * c10, c1 = gy * c01 + fy * c11;
-    g[2] = (c1 - c0) * inv_voxel_;
-    g[1] = (gz * (c10 - c00) + fz * (c11 - c01)) * inv_voxel_;
-    g[0] = (gz * (gy * (c[1] - c[0]) + fy * (c[3] - c[2])) + fz * (gy * (c[5] - c[4]) + fy * (c[7] - c[6]))) *
-           inv_voxel_;
-    return gz * c0 + fz * c1 + 0.0;  // + the distance to the box, 0 inside
-  }
-
- private:
-  const ShapeLookup& lookup_;
-  Eigen::Vector3d lo_, hi_;
-  double inv_voxel_;
-  int64_t nx_, nxy_;
-};
+// lookup.EvaluateDense(phi_z, p, g, nullptr), bit for bit: the value and
+// gradient of the Newton steps, by the inlined cell lookup for points inside
+// the grid box (*in_cell true, *cell set) and the general path for the others.
+inline double ValueAndGradient(const ShapeLookup& lookup, const double* phi_z, const double* p, double* g,
+                               ShapeLookup::DenseCell* cell, bool* in_cell) {
+  *in_cell = lookup.LocateInside(p, cell);
+  if (!*in_cell) return lookup.EvaluateDense(phi_z, p, g, nullptr);
+  return lookup.DenseAt(phi_z, *cell, g);
+}
 
 // The crossing of origin + t direction bracketed in [lo, hi] (phi v_lo at lo
 // and v_hi at hi on either side of 0): a secant, then Newton steps kept
 // inside the bracket until |phi| is negligible. c, g_c and *v are those of
-// the returned t.
+// the returned t, and so are *cell and *in_cell (ValueAndGradient).
 double RefineCrossing(const ShapeLookup& lookup, const double* phi_z, const double* origin,
                       const double* direction, double lo, double hi, double v_lo, double v_hi, double* c,
-                      double* g_c, double* v) {
+                      double* g_c, double* v, ShapeLookup::DenseCell* cell, bool* in_cell) {
   double t = lo + (hi - lo) * v_lo / (v_lo - v_hi);
   const double tolerance = 1e-9 * lookup.grid().voxel_size;
-  const DenseGradient evaluate(lookup);
   for (int k = 0;; ++k) {
     PointOnRay(origin, direction, t, c);
-    *v = evaluate(phi_z, c, g_c);
+    *v = ValueAndGradient(lookup, phi_z, c, g_c, cell, in_cell);
     const double slope = g_c[0] * direction[0] + g_c[1] * direction[1] + g_c[2] * direction[2];
     if (k == kNewtonSteps || std::abs(*v) <= tolerance || slope == 0.0 || !std::isfinite(slope)) break;
     t = std::min(std::max(t - *v / slope, lo), hi);
@@ -164,7 +126,9 @@ bool RayDistance(const ShapeLookup& lookup, const double* phi_z, const double* o
   }
   if (same_side(phi_hi)) return false;
   double v;
-  const double d = RefineCrossing(lookup, phi_z, o, direction, lo, hi, phi_lo, phi_hi, c, g_c, &v);
+  ShapeLookup::DenseCell cell;
+  bool in_cell;
+  const double d = RefineCrossing(lookup, phi_z, o, direction, lo, hi, phi_lo, phi_hi, c, g_c, &v, &cell, &in_cell);
   if (d > limit) return false;
   // A crossing at a grazing angle (or none after all) counts as a miss.
   if (!(g_c[0] * u[0] + g_c[1] * u[1] + g_c[2] * u[2] < -kMinRaySlope)) return false;
@@ -212,8 +176,10 @@ bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double*
   }
   if (vs[count - 1] < 0.0 && count >= 2) {
     // Crossing bracketed in [ls[count-2], ls[count-1]].
+    ShapeLookup::DenseCell cell;
+    bool in_cell;
     *lambda = RefineCrossing(lookup, phi_z, o_cam, u, ls[count - 2], ls[count - 1], vs[count - 2], vs[count - 1],
-                             c, g_c, phi_min);
+                             c, g_c, phi_min, &cell, &in_cell);
     return true;
   }
   if (vs[count - 1] < 0.0) return finish_miss(ls[0]);  // inside at the box entry (a shape touching the box)
@@ -278,7 +244,8 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
     q.found = false;
     if (a.failed || same_side(a.sign, a.phi_hi)) continue;
     double v;
-    const double d = RefineCrossing(lookup, phi_z, q.o, a.direction, a.lo, a.hi, a.phi_lo, a.phi_hi, q.c, q.g_c, &v);
+    const double d = RefineCrossing(lookup, phi_z, q.o, a.direction, a.lo, a.hi, a.phi_lo, a.phi_hi, q.c, q.g_c, &v,
+                                    &q.cell, &q.in_cell);
     if (d > a.limit) continue;
     if (!(q.g_c[0] * q.u[0] + q.g_c[1] * q.u[1] + q.g_c[2] * q.u[2] < -kMinRaySlope)) continue;
     q.distance = d;
@@ -339,7 +306,8 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
     q.hit = a.bracketed;
     if (!q.hit) continue;
     double v;
-    q.lambda = RefineCrossing(lookup, phi_z, o_cam, q.u, a.prev_l, a.last_l, a.prev_v, a.last_v, q.c, q.g_c, &v);
+    q.lambda = RefineCrossing(lookup, phi_z, o_cam, q.u, a.prev_l, a.last_l, a.prev_v, a.last_v, q.c, q.g_c, &v,
+                              &q.cell, &q.in_cell);
   }
 }
 

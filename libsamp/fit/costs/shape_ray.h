@@ -49,20 +49,27 @@ bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double*
 // result equals the single-ray function's.
 constexpr int kRayBatch = 8;
 
-// RayDistance for each ray: in o, phi_o, u; out found, distance, c, g_c.
+// RayDistance for each ray: in o, phi_o, u; out found, distance, c, g_c,
+// and c's cell when c lies inside the grid box (in_cell; d/dz at c by
+// ShapeLookup::CodeGradientAt without locating c again).
 struct RayDistanceQuery {
   double o[3], phi_o, u[3];
   bool found;
   double distance, c[3], g_c[3];
+  ShapeLookup::DenseCell cell;
+  bool in_cell;
 };
 void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQuery* rays, int n);
 
 // FirstCrossing(.., refine_miss = false, max_lambda) for each ray from one
-// camera centre: in u, max_lambda; out hit (lambda, c, g_c set only on a hit).
+// camera centre: in u, max_lambda; out hit (lambda, c, g_c, cell and in_cell
+// as RayDistanceQuery's, set only on a hit).
 struct FirstCrossingQuery {
   double u[3], max_lambda;
   bool hit;
   double lambda, c[3], g_c[3];
+  ShapeLookup::DenseCell cell;
+  bool in_cell;
 };
 void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double* o_cam, FirstCrossingQuery* rays,
                     int n);
