@@ -342,8 +342,8 @@ void ShapeLookup::CodeGradientAt(const DenseCell& cell, double* d_z) const {
 }
 
 double ShapeLookup::EvaluateDenseValueOutside(const double* phi, const double* point) const {
-  // Locate's clamping and distance, then DenseAt's interpolation of the
-  // clamped point plus the distance (Interpolate's sum).
+  // Locate's clamping and distance, then the clamped point's cell (inside the
+  // box by construction) plus the distance, Interpolate's sum.
   double q[3];
   double outside_sq = 0.0;
   for (int a = 0; a < 3; ++a) {
@@ -353,22 +353,9 @@ double ShapeLookup::EvaluateDenseValueOutside(const double* phi, const double* p
   }
   if (!std::isfinite(outside_sq)) return std::numeric_limits<double>::quiet_NaN();
   const double distance = outside_sq > 0.0 ? std::sqrt(outside_sq) : 0.0;
-  int i0[3];
-  double f[3];
-  for (int a = 0; a < 3; ++a) {
-    const double u = (q[a] - grid_.origin[a]) * inv_voxel_;
-    const int i = std::min(std::max(int(u), 0), grid_.dims[a] - 2);
-    i0[a] = i;
-    f[a] = u - i;
-  }
-  const int64_t nx = grid_.dims.x(), nxy = nx * grid_.dims.y();
-  const double* c = phi + (i0[0] + nx * i0[1] + nxy * i0[2]);
-  const double fx = f[0], fy = f[1], fz = f[2];
-  const double gx = 1.0 - fx, gy = 1.0 - fy, gz = 1.0 - fz;
-  const double c00 = gx * c[0] + fx * c[1], c10 = gx * c[nx] + fx * c[nx + 1];
-  const double c01 = gx * c[nxy] + fx * c[nxy + 1], c11 = gx * c[nxy + nx] + fx * c[nxy + nx + 1];
-  const double c0 = gy * c00 + fy * c10, c1 = gy * c01 + fy * c11;
-  return gz * c0 + fz * c1 + distance;
+  DenseCell cell;
+  LocateInside(q, &cell);
+  return DenseAt(phi, cell, nullptr) + distance;
 }
 
 const double* ShapeLookup::DenseCached(const double* z) const {
