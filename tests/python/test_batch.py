@@ -113,6 +113,8 @@ def test_fit_on_scheduler_and_two_worker_processes(dask_cluster, tmp_path):
     with open(os.path.join(out, "batch_summary.json")) as f:
         summary = json.load(f)
     assert len({s["pid"] for s in summary["sequences"]}) == 2  # both worker processes fitted
+    # The task thread's CPU time: positive, and not above its wall time (one thread).
+    assert all(0 < s["cpu_seconds"] <= s["seconds"] + 0.05 for s in summary["sequences"])
     os.remove(os.path.join(out, "batch_summary.json"))
     assert_same_as_samp_fit(root, out, names, tmp_path, "--em-iterations", "1")
 
@@ -298,3 +300,28 @@ def test_train_on_a_local_cluster_matches_samp_train(tmp_path):
     _, stderr = p.communicate(timeout=TIMEOUT)
     assert p.returncode == 1
     assert "only 6 of 7 models are usable; a model with R = 6 components needs at least 7" in stderr
+
+
+def test_local_cluster_runs_its_workers_with_the_quiet_housekeeping():
+    """--scheduler local: the worker processes get the malloc environment and Dask's slowed-down
+    housekeeping (no stack profiler, no work stealing); LOCAL_CLUSTER_CONFIG says why."""
+    import argparse
+
+    from samp import batch as driver
+
+    def worker_view():
+        import dask
+        return ({k: dask.config.get(k) for k in driver.LOCAL_CLUSTER_CONFIG},
+                {k: os.environ.get(k) for k in driver.WORKER_MALLOC_ENVIRON})
+
+    client, cluster = driver._client(argparse.Namespace(scheduler="local", workers=1, connect_timeout="60s"))
+    try:
+        views = list(client.run(worker_view).values())
+        assert len(views) == 1
+        config, environ = views[0]
+        assert config == driver.LOCAL_CLUSTER_CONFIG
+        assert environ == driver.WORKER_MALLOC_ENVIRON
+        assert client.run_on_scheduler(lambda dask_scheduler: "stealing" in dask_scheduler.extensions) is False
+    finally:
+        client.close()
+        cluster.close()

@@ -63,6 +63,7 @@ def fit_task(options_json, seq_dir, out_dir):
     """One sequence on a worker: RunFit into out_dir. Returns a plain dict (never raises:
     a samp.Error is a failed sequence, reported by the client)."""
     start = time.time()
+    start_cpu = time.thread_time()
     result = {"sequence": seq_dir, "output": out_dir, "host": os.uname().nodename, "pid": os.getpid()}
     try:
         native = _samp.RunFitOptions()
@@ -81,6 +82,7 @@ def fit_task(options_json, seq_dir, out_dir):
         result["num_tracks_fitted"] = 0
         result["num_tracks_failed"] = 0
     result["seconds"] = time.time() - start
+    result["cpu_seconds"] = time.thread_time() - start_cpu
     return result
 
 
@@ -150,12 +152,33 @@ def fit_options_from_args(args):
 WORKER_MALLOC_ENVIRON = {"MALLOC_TRIM_THRESHOLD_": str(64 << 20), "MALLOC_MMAP_THRESHOLD_": str(32 << 20)}
 
 
+# Dask's housekeeping in the LocalCluster's processes, slowed down. Every
+# worker samples its task thread's Python stack every 10 ms for the dashboard's
+# profile (there is no dashboard here; samp's tasks are native code), and
+# every process checks its event loop every 20 ms, its memory every 100 ms and
+# its system load every 500 ms; the scheduler looks for work to steal every
+# 100 ms. On the 2-core machine that took ~12 % of a core beside the tasks
+# (the driver 7 s and the worker's other threads 7 s in a 110 s run of
+# 1 worker), and once both cores run tasks it comes out of their time. These
+# values halve it (docs/benchmarks.md, "samp.batch"). Stealing is not needed:
+# the tasks are independent and the scheduler queues them (worker-saturation),
+# handing each worker a new one as it finishes.
+LOCAL_CLUSTER_CONFIG = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "200ms",
+    "distributed.worker.memory.monitor-interval": "1s",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.scheduler.work-stealing": False,
+}
+
+
 def _client(args):
     import dask
     from distributed import Client, LocalCluster
 
     if args.scheduler == "local":
         settings = {"distributed.nanny.pre-spawn-environ." + k: v for k, v in WORKER_MALLOC_ENVIRON.items()}
+        settings.update(LOCAL_CLUSTER_CONFIG)
         with dask.config.set(settings):
             cluster = LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
                                    dashboard_address=None)
