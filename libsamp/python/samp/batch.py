@@ -157,10 +157,9 @@ WORKER_MALLOC_ENVIRON = {"MALLOC_TRIM_THRESHOLD_": str(64 << 20), "MALLOC_MMAP_T
 # profile (there is no dashboard here; samp's tasks are native code), and
 # every process checks its event loop every 20 ms, its memory every 100 ms and
 # its system load every 500 ms; the scheduler looks for work to steal every
-# 100 ms. On the 2-core machine that took ~12 % of a core beside the tasks
-# (the driver 7 s and the worker's other threads 7 s in a 110 s run of
-# 1 worker), and once both cores run tasks it comes out of their time. These
-# values halve it (docs/benchmarks.md, "samp.batch"). Stealing is not needed:
+# 100 ms. Once every core runs a task, that CPU comes out of the tasks' time;
+# these values halve it (the figures: docs/benchmarks.md, "Python package and
+# samp.batch"). Stealing is not needed:
 # the tasks are independent and the scheduler queues them (worker-saturation),
 # handing each worker a new one as it finishes.
 LOCAL_CLUSTER_CONFIG = {
