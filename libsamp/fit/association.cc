@@ -20,6 +20,8 @@ Association AssociateByDetection(const TrackFrame& f, double radius, DataTerm te
   gate.ray_sigmas = term == DataTerm::kDisparity ? 3.0 : 0.0;
   const double centre_depth = (gate.box_centre - gate.camera_centre).dot(gate.optical_axis);
   const Eigen::Vector3d axis = gate.optical_axis.normalized();  // as DataTermOptions gives it the cost
+  a.points.reserve(f.candidate_points_in_world.size());
+  a.sigmas.reserve(f.candidate_points_in_world.size());
   for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
     const Eigen::Vector3d& p = f.candidate_points_in_world[i];
     if (term == DataTerm::kDisparity && !InFrontOfCamera(p, gate.camera_centre, axis)) {
@@ -50,6 +52,8 @@ Association AssociateByFit(const TrackFrame& f, const ShapeLookup& lookup, const
   const Eigen::Vector3d hi = box.max + Eigen::Vector3d::Constant(options.em_box_margin);
   // phi_z from the dense grid of z (the same value as lookup.Evaluate(z, o), bit for bit).
   const double* phi_z = lookup.DenseCached(z.data());
+  a.points.reserve(f.candidate_points_in_world.size());
+  a.sigmas.reserve(f.candidate_points_in_world.size());
   for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
     const Eigen::Vector3d o = object_from_world * f.candidate_points_in_world[i];
     if ((o.array() < lo.array()).any() || (o.array() > hi.array()).any()) {
