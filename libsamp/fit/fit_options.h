@@ -126,8 +126,8 @@ struct FitOptions {
   // End a solve after this many consecutive rejected steps (0 = never): the
   // cost is then at a kink of the residuals (ray distance: rays switching
   // between meeting and missing the surface). One is enough: the trust region
-  // is then so wide that LM's damping is negligible, and the retries take the
-  // same step again (docs/fitting.md, "Solver").
+  // is then so wide that LM's damping is negligible, and a retry takes almost
+  // the same step (docs/fitting.md, "Solver").
   int max_rejected_steps = 1;
   double function_tolerance = 1e-6;
   double gradient_tolerance = 1e-10;
