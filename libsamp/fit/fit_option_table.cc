@@ -98,6 +98,10 @@ OptionTable<FitOptions> MakeFitTable() {
   t.Add("detection_position", &F::detection_position,
         "the detected box positions observe the poses (the tracker's detector noise model); false = off "
         "(the paper)");
+  t.Add("detection_position_dead_zone", &F::detection_position_dead_zone,
+        "within this many standard deviations of its detection a frame's origin feels no pull of the "
+        "detected position; 0 = the plain Gaussian term")
+      .NonNegative();
   t.Add("standing_speed", &F::standing_speed, "below this speed the standing motion model is used, m/s")
       .NonNegative();
   t.Add("straight_yaw_rate", &F::straight_yaw_rate,

@@ -161,10 +161,14 @@ int BuildTrackProblem(const ShapeLookup& lookup, const Track& track, const std::
                               nullptr, pose);
     if (position_weight > 0.0 && f.detection_covariance.determinant() > 0.0) {
       const Eigen::Matrix3d& r = f.world_from_camera.linear();
+      ceres::LossFunction* dead_zone =
+          options.detection_position_dead_zone > 0.0
+              ? new DeadZoneLoss(std::sqrt(position_weight) * options.detection_position_dead_zone)
+              : nullptr;
       problem->AddResidualBlock(DetectionPositionCost::Create(f.world_from_camera * f.detection.position,
                                                               r * f.detection_covariance * r.transpose(),
                                                               position_weight, DetectionBiasInWorld(f, options)),
-                                nullptr, pose);
+                                dead_zone, pose);
     }
     // One frame (T = 1): no motion term and no velocities; the joint problem
     // is then the single-frame problem.

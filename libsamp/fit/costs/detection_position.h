@@ -13,13 +13,20 @@
 // detector saw it when its few visible points fit a shape in several places
 // (the visible top of a car behind another fits a shape with its cabin moved
 // along the body as well as the true one).
+// With FitOptions::detection_position_dead_zone > 0 (off by default), within
+// that many sigmas of its detection a frame's origin feels no pull
+// (DeadZoneLoss below): the term still keeps a fit from a minimum of the data
+// term metres away, but no longer drags it within the detector's own
+// uncertainty (docs/fitting.md, "Detected position").
 // Parameter block: pose (tx, ty, tz, theta).
 #pragma once
 
+#include <ceres/loss_function.h>
 #include <ceres/sized_cost_function.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 
 namespace samp {
@@ -56,6 +63,30 @@ class DetectionPositionCost : public ceres::SizedCostFunction<3, 4> {
  private:
   Eigen::Vector3d detected_;
   Eigen::Matrix3d sqrt_information_;
+};
+
+// The loss of a detected position with a dead zone (FitOptions::
+// detection_position_dead_zone): on the block's squared norm s = w m^2
+// (m the Mahalanobis distance of the origin from the detection),
+//   rho(s) = (sqrt(s) - k)^2 for sqrt(s) > k, else 0,   k = sqrt(w) x the zone in sigmas,
+//   rho'(s) = 1 - k / sqrt(s),   rho''(s) = k / (2 s sqrt(s))   (0 inside the zone).
+// C^1 at the edge; beyond it the gradient is the Gaussian term's at m - zone.
+class DeadZoneLoss : public ceres::LossFunction {
+ public:
+  explicit DeadZoneLoss(double k) : k_(k) {}
+  void Evaluate(double s, double rho[3]) const override {
+    const double r = std::sqrt(std::max(s, 0.0));
+    if (r <= k_ || r == 0.0) {
+      rho[0] = rho[1] = rho[2] = 0.0;
+      return;
+    }
+    rho[0] = (r - k_) * (r - k_);
+    rho[1] = (r - k_) / r;
+    rho[2] = k_ / (2.0 * s * r);
+  }
+
+ private:
+  double k_;
 };
 
 }  // namespace samp

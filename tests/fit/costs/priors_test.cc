@@ -1,8 +1,10 @@
 // The priors' and detections' cost functors (costs/motion.h, ground.h,
 // detection_position.h, shape_prior.h, detection_size.h): residuals and
 // analytic Jacobians against central differences and direct formulas.
+#include <ceres/ceres.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
@@ -112,6 +114,58 @@ TEST(DetectionPositionCost, ResidualAndJacobian) {
   double r0[3];
   ASSERT_TRUE(zero.Evaluate(params, r0, nullptr));
   for (int i = 0; i < 3; ++i) EXPECT_EQ(r0[i], res[i]);
+}
+
+// The dead zone of a detected position (DeadZoneLoss): rho and its two
+// derivatives against finite differences; no cost and no pull within the
+// zone; a solve from outside stops at the zone's edge, not at the detection.
+TEST(DetectionPositionCost, DeadZoneLoss) {
+  const double k = 0.8;
+  const DeadZoneLoss loss(k);
+  double rho[3];
+  for (double s : {0.0, 0.1, 0.63, 0.64}) {
+    loss.Evaluate(s, rho);
+    EXPECT_EQ(rho[0], 0.0) << s;
+    EXPECT_EQ(rho[1], 0.0) << s;
+  }
+  for (double s : {0.7, 1.0, 4.0, 30.0}) {
+    loss.Evaluate(s, rho);
+    EXPECT_NEAR(rho[0], (std::sqrt(s) - k) * (std::sqrt(s) - k), 1e-12) << s;
+    const double h = 1e-6 * s;
+    double lo[3], hi[3];
+    loss.Evaluate(s - h, lo);
+    loss.Evaluate(s + h, hi);
+    EXPECT_NEAR(rho[1], (hi[0] - lo[0]) / (2 * h), 1e-6) << s;
+    EXPECT_NEAR(rho[2], (hi[1] - lo[1]) / (2 * h), 1e-5 * std::max(1.0, std::abs(rho[2]))) << s;
+    EXPECT_GT(rho[1], 0.0) << s;
+    EXPECT_LT(rho[1], 1.0) << s;
+  }
+  // Far from the zone the loss approaches the plain square: rho' -> 1.
+  loss.Evaluate(1e6, rho);
+  EXPECT_GT(rho[1], 0.999);
+
+  // One pose and one detection with sigma 0.5 m and weight 0.25: a zone of
+  // 1 sigma is k = sqrt(0.25) x 1. From 0.3 m off (inside) nothing moves;
+  // from 2 m off the solve stops on the zone's edge, 0.5 m from the detection.
+  const Eigen::Vector3d detected(3.0, 1.0, 20.0);
+  const Eigen::Matrix3d cov = 0.25 * Eigen::Matrix3d::Identity();
+  for (const double start : {0.3, 2.0}) {
+    double pose[4] = {detected.x() + start, detected.y(), detected.z(), 0.0};
+    const double x0 = pose[0];
+    ceres::Problem problem;
+    problem.AddResidualBlock(DetectionPositionCost::Create(detected, cov, 0.25), new DeadZoneLoss(std::sqrt(0.25)),
+                             pose);
+    ceres::Solver::Options options;
+    options.logging_type = ceres::SILENT;
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &problem, &summary);
+    const double offset = pose[0] - detected.x();
+    if (start < 0.5) {
+      EXPECT_EQ(pose[0], x0);
+    } else {
+      EXPECT_NEAR(offset, 0.5, 1e-3) << summary.BriefReport();
+    }
+  }
 }
 
 TEST(ShapePriorCost, ResidualAndJacobian) {
