@@ -16,7 +16,7 @@
 // With FitOptions::detection_position_dead_zone > 0 (off by default), within
 // that many sigmas of its detection a frame's origin feels no pull
 // (DeadZoneLoss below): the term still keeps a fit from a minimum of the data
-// term metres away, but no longer drags it within the detector's own
+// term metres away, but does not drag it within the detector's own
 // uncertainty (docs/fitting.md, "Detected position").
 // Parameter block: pose (tx, ty, tz, theta).
 #pragma once
@@ -76,7 +76,7 @@ class DeadZoneLoss : public ceres::LossFunction {
   explicit DeadZoneLoss(double k) : k_(k) {}
   void Evaluate(double s, double rho[3]) const override {
     const double r = std::sqrt(std::max(s, 0.0));
-    if (r <= k_ || r == 0.0) {
+    if (r <= k_) {  // inside the zone (k >= 0, so also s = 0)
       rho[0] = rho[1] = rho[2] = 0.0;
       return;
     }
