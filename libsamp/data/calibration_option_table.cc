@@ -20,6 +20,9 @@ OptionTable<DetectorNoiseOptions> MakeDetectorNoiseTable() {
   t.Add("min_track_detections", &O::min_track_detections, "tracks with fewer detections are not used").AtLeast(3);
   t.Add("min_bin_count", &O::min_bin_count, "a distance bin with fewer detections does not enter the sigma(d) fit")
       .AtLeast(2);
+  t.Add("min_bin_tracks", &O::min_bin_tracks,
+        "... or with detections of fewer tracks (self-calibration) or true cars (calibrate-detector)")
+      .AtLeast(1);
   t.Add("min_samples", &O::min_samples, "a term with fewer samples keeps its default (noted)").AtLeast(2);
   t.Add("smoother_degree", &O::smoother_degree,
         "degree of the robust smoother of a track's bottom centre in time (1 constant velocity, 2 constant "

@@ -6,6 +6,7 @@
 #include <limits>
 #include <map>
 #include <numeric>
+#include <set>
 #include <sstream>
 
 #include "libsamp/core/error.h"
@@ -100,6 +101,7 @@ struct Residual {
   double size[3] = {0, 0, 0};                // h, w, l
   double yaw = 0.0;                          // modulo pi, rad
   bool has_position = false, has_size = false, has_yaw = false;
+  int car = 0;  // its track (self-calibration) or true car: a distance bin counts the cars it samples
   // The largest |along| and |across| a match gate let through (ground truth
   // matched within a horizontal distance g: sqrt(g^2 - across^2) and
   // sqrt(g^2 - along^2)); infinite without a gate.
@@ -182,6 +184,7 @@ void SummarisePosition(const std::vector<Residual>& residuals, const DetectorNoi
   const size_t num_bins = o.bin_edges.size();
   std::vector<std::vector<double>> along(num_bins), across(num_bins), vertical(num_bins), distance(num_bins);
   std::vector<std::vector<double>> along_limit(num_bins), across_limit(num_bins);
+  std::vector<std::set<int>> cars(num_bins);
   bool gated = false;
   for (const Residual& r : residuals) {
     if (!r.has_position) continue;
@@ -191,6 +194,7 @@ void SummarisePosition(const std::vector<Residual>& residuals, const DetectorNoi
     along[bin].push_back(r.along), across[bin].push_back(r.across), vertical[bin].push_back(r.vertical);
     along_limit[bin].push_back(r.along_limit), across_limit[bin].push_back(r.across_limit);
     distance[bin].push_back(r.distance);
+    cars[bin].insert(r.car);
     gated = gated || std::isfinite(r.along_limit) || std::isfinite(r.across_limit);
   }
   std::vector<std::pair<double, double>> fit_along, fit_across, fit_vertical;
@@ -202,6 +206,7 @@ void SummarisePosition(const std::vector<Residual>& residuals, const DetectorNoi
     bin.min_distance = o.bin_edges[b];
     bin.max_distance = b + 1 < num_bins ? o.bin_edges[b + 1] : 1e3;
     bin.count = static_cast<int>(along[b].size());
+    bin.tracks = static_cast<int>(cars[b].size());
     const RobustEstimate ea = Robust(along[b], o.trim_sigmas, gated ? along_limit[b] : std::vector<double>()),
                          ec = Robust(across[b], o.trim_sigmas, gated ? across_limit[b] : std::vector<double>()),
                          ev = Robust(vertical[b], o.trim_sigmas);
@@ -213,6 +218,14 @@ void SummarisePosition(const std::vector<Residual>& residuals, const DetectorNoi
     bin.mean_distance = mean_distance;
     model->bins.push_back(bin);
     if (bin.count < o.min_bin_count) continue;
+    if (bin.tracks < o.min_bin_tracks) {
+      std::ostringstream note;
+      note << "position: the distance bin [" << bin.min_distance << ", " << bin.max_distance << ") m holds "
+           << bin.count << " detections of " << bin.tracks << (bin.tracks == 1 ? " car" : " cars") << " (need "
+           << o.min_bin_tracks << "): not in the sigma(d) fit";
+      model->notes.push_back(note.str());
+      continue;
+    }
     fit_along.push_back({mean_distance, bin.along_sigma});
     fit_across.push_back({mean_distance, bin.across_sigma});
     fit_vertical.push_back({mean_distance, bin.vertical_sigma});
@@ -551,6 +564,7 @@ DetectorNoiseModel EstimateDetectorNoise(const std::vector<LinkedSequence>& sequ
       ++model.num_tracks;
       in_confident += n;
       tracks.push_back(TrackResidualsOf(track, frame_of, o, defaults, &counts));
+      for (Residual& r : tracks.back().residuals) r.car = model.num_tracks;
     }
   }
   const std::string correlation_note = CorrectShrinkage(o, &tracks, &model);
@@ -663,6 +677,7 @@ DetectorNoiseModel EstimateDetectorNoiseFromTruth(const std::vector<MatchedDetec
     r.has_size = true;
     r.yaw = AxisDifference(m.detection.rotation_y, m.truth.rotation_y);
     r.has_yaw = true;
+    r.car = m.truth_id;
     flips += std::abs(WrapAngle(m.detection.rotation_y - m.truth.rotation_y)) > kPi / 2;
     residuals.push_back(r);
     ++cars[m.truth_id];

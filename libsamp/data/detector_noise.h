@@ -37,6 +37,9 @@ namespace samp {
 struct DistanceBin {
   double min_distance = 0.0, max_distance = 0.0;
   int count = 0;  // detections in the bin
+  // The tracks (self-calibration) or true cars they belong to; 0 = not
+  // recorded (a file written without it).
+  int tracks = 0;
   // Their mean horizontal distance (m): where the bin's sigmas enter the
   // a + b d fit. 0 = not recorded (a file written without it).
   double mean_distance = 0.0;
@@ -125,6 +128,11 @@ struct DetectorNoiseOptions {
   std::vector<double> bin_edges = {0, 10, 20, 30, 40, 60};
   // A bin with fewer detections does not enter the sigma(d) fit.
   int min_bin_count = 10;
+  // ... or detections of fewer tracks (true cars): one car's errors are
+  // correlated in time and its own (a persistent false positive far beyond
+  // the cars, tracked with a steady box, reads as a tiny sigma there and
+  // pulls the slope of sigma(d) to 0).
+  int min_bin_tracks = 3;
   // Fewer samples for a term: that term keeps its default, with a note.
   int min_samples = 30;
   // Degree of the robust smoother of a track's bottom centre in time (1 =

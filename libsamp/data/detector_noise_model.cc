@@ -103,6 +103,7 @@ static void OptionFields(OptionsJson& io, DistanceBin& b) {
   io("min_distance", b.min_distance);
   io("max_distance", b.max_distance);
   io("count", b.count);
+  io.Optional("tracks", b.tracks, 0);
   io.Optional("mean_distance", b.mean_distance, 0.0);
   io("along_sigma", b.along_sigma);
   io("across_sigma", b.across_sigma);
@@ -192,8 +193,9 @@ DetectorNoiseModel DetectorNoiseModelFromJson(const std::string& text, const std
   OptionsFromJson(f, &m);
   for (size_t k = 0; k < m.bins.size(); ++k) {
     const DistanceBin& b = m.bins[k];
-    SAMP_CHECK(b.count >= 0 && b.max_distance >= b.min_distance)
-        << source << ": distance_bins[" << k << "]: a distance bin needs count >= 0 and max_distance >= min_distance";
+    SAMP_CHECK(b.count >= 0 && b.tracks >= 0 && b.tracks <= b.count && b.max_distance >= b.min_distance)
+        << source << ": distance_bins[" << k
+        << "]: a distance bin needs count >= 0, tracks in [0, count] and max_distance >= min_distance";
     SAMP_CHECK(b.mean_distance == 0.0 || (b.mean_distance >= b.min_distance && b.mean_distance <= b.max_distance))
         << source << ": distance_bins[" << k << "].mean_distance " << b.mean_distance << " is outside the bin ["
         << b.min_distance << ", " << b.max_distance << "]";

@@ -44,6 +44,41 @@ double RobustSigma(const std::vector<SmoothedSeries>& series) {
   return 1.4826 * MedianOf(magnitudes);
 }
 
+constexpr double kInvSqrt2Pi = 0.3989422804014327;
+double Density(double z) { return kInvSqrt2Pi * std::exp(-0.5 * z * z); }
+double Cumulative(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
+
+// Moments of a standard normal z kept within |z| <= k: P(|z| <= k) and E[z^2; |z| <= k].
+void KeptMoments(double k, double* probability, double* square) {
+  *probability = std::erf(k / std::sqrt(2.0));
+  *square = *probability - 2.0 * k * Density(k);
+}
+
+// Moments of a standard bivariate normal (u, v) with correlation r kept within
+// |u| <= h and |v| <= k: P(both kept) and E[u v; both kept]. Given u, v is
+// normal with mean r u and variance 1 - r^2, so the inner integral over v is
+// closed; the outer one over u (even in u) is a 16-node Gauss-Legendre rule on [0, h].
+void KeptPairMoments(double r, double h, double k, double* probability, double* product) {
+  static constexpr double kNodes[8] = {0.0950125098376374, 0.2816035507792589, 0.4580167776572274,
+                                       0.6178762444026438, 0.7554044083550030, 0.8656312023878318,
+                                       0.9445750230732326, 0.9894009349916499};
+  static constexpr double kWeights[8] = {0.1894506104550685, 0.1826034150449236, 0.1691565193950025,
+                                         0.1495959888165767, 0.1246289712555339, 0.0951585116824928,
+                                         0.0622535239386479, 0.0271524594117541};
+  const double sd = std::sqrt(std::max(1.0 - r * r, 1e-12));
+  double p = 0, m = 0;
+  for (int side = -1; side <= 1; side += 2) {
+    for (int n = 0; n < 8; ++n) {
+      const double u = 0.5 * h * (1.0 + side * kNodes[n]), w = 0.5 * h * kWeights[n] * Density(u);
+      const double mean = r * u, lo = (-k - mean) / sd, hi = (k - mean) / sd;
+      const double kept = Cumulative(hi) - Cumulative(lo);
+      p += w * kept;
+      m += w * u * (mean * kept - sd * (Density(hi) - Density(lo)));
+    }
+  }
+  *probability = 2.0 * p, *product = 2.0 * m;
+}
+
 }  // namespace
 
 // M = C - H C - C H^T + H C H^T with H = A G A^T W, G = (A^T W A)^-1:
@@ -127,16 +162,49 @@ FrameCorrelation EstimateFrameCorrelation(const std::vector<SmoothedSeries>& ser
   if (result.num_pairs < o.min_pairs || observed_square <= 0) return result;
   result.measured = true;
   const double observed = observed_next / observed_square;
-  // The gap between the expected ratio at rho and the observed one.
+  // The gap between the expected ratio at rho and the observed one. The
+  // trim keeps the small residuals, whose products with their neighbours are
+  // smaller than the correlation says; so the expected sums are the
+  // moments of normal residuals given that they were kept (KeptMoments,
+  // KeptPairMoments), at the residuals' scale s that makes the kept squares
+  // match (the trim's limit is s k_i sqrt(M_ii) for each residual).
   auto gap = [&](double rho) {
-    double expected_next = 0, expected_square = 0;
+    std::vector<ResidualMoments> moments;
+    moments.reserve(series.size());
+    for (const SmoothedSeries& s : series) moments.push_back(ExpectedResidualMoments(s, rho));
+    // The limit in standard deviations of residual i of series t at scale `scale`.
+    auto within = [&](size_t t, size_t i, double scale) {
+      return limit / (scale * std::sqrt(std::max(moments[t].diagonal[i], 1e-12)));
+    };
+    // E[r_i^2 | kept] / scale^2, summed over the kept residuals.
+    auto kept_squares = [&](double scale) {
+      double sum = 0;
+      for (size_t t = 0; t < series.size(); ++t)
+        for (size_t i = 0; i < kept[t].size(); ++i) {
+          if (!kept[t][i]) continue;
+          double p, square;
+          KeptMoments(within(t, i, scale), &p, &square);
+          sum += moments[t].diagonal[i] * square / std::max(p, 1e-12);
+        }
+      return sum;
+    };
+    double expected_square = 0, scale = 1.0;
+    for (int round = 0; round < 6; ++round) {
+      expected_square = kept_squares(scale);
+      scale = std::sqrt(observed_square / std::max(expected_square, 1e-12));
+    }
+    expected_square = kept_squares(scale);
+    double expected_next = 0;
     for (size_t t = 0; t < series.size(); ++t) {
-      const ResidualMoments m = ExpectedResidualMoments(series[t], rho);
       const std::vector<bool>& k = kept[t];
-      for (size_t i = 0; i < k.size(); ++i) {
-        if (!k[i]) continue;
-        expected_square += m.diagonal[i];
-        if (i + 1 < k.size() && k[i + 1]) expected_next += m.next[i];
+      const ResidualMoments& m = moments[t];
+      for (size_t i = 0; i + 1 < k.size(); ++i) {
+        if (!k[i] || !k[i + 1]) continue;
+        const double sd = std::sqrt(std::max(m.diagonal[i], 1e-12) * std::max(m.diagonal[i + 1], 1e-12));
+        const double r = std::clamp(m.next[i] / sd, -0.999999, 0.999999);
+        double p, product;
+        KeptPairMoments(r, within(t, i, scale), within(t, i + 1, scale), &p, &product);
+        expected_next += sd * product / std::max(p, 1e-12);
       }
     }
     return std::abs(expected_next / std::max(expected_square, 1e-12) - observed);

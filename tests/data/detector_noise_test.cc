@@ -275,6 +275,52 @@ TEST(DetectorNoiseSelf, PositionAloneRecovered) {
   EXPECT_EQ(m.num_tracks, 48);
 }
 
+// A persistent false positive far beyond the cars, tracked with a steady box
+// (140 m, a few centimetres of jitter): its one track fills the last distance
+// bin with a tiny sigma, which on its own would pull sigma(d) flat. A bin
+// needs detections of 3 tracks to enter the fit.
+TEST(DetectorNoiseSelf, OneFarTrackDoesNotFlattenTheSigmas) {
+  const TrueNoise n = PositionNoise();
+  std::vector<LinkedSequence> sequences = Sequences(n, 21);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> jitter(0.0, 0.02);
+  LinkedSequence& seq = sequences.front();
+  LinkedTrack ghost;
+  ghost.id = 99;
+  for (FrameDetections& frame : seq.frames) {
+    ObjectLabel d;
+    d.frame = frame.frame;
+    d.track_id = ghost.id;
+    d.position = Eigen::Vector3d(20.0 + jitter(rng), 1.65 + jitter(rng), 140.0 + jitter(rng));
+    d.height = kHeight, d.width = kWidth, d.length = kLength;
+    d.rotation_y = -M_PI / 2;
+    ghost.detections.push_back(d);
+    frame.detections.push_back(d);
+    ++seq.num_detections;
+  }
+  seq.tracks.push_back(ghost);
+  TrackerOptions weighting;
+  weighting.along_sigma_a = 0.2, weighting.along_sigma_b = 0.02;
+  weighting.across_sigma_a = 0.08, weighting.across_sigma_b = 0.004;
+  DetectorNoiseOptions o;
+  o.bin_edges = {0, 10, 20, 30, 40, 60, 100};
+  const DetectorNoiseModel m = EstimateDetectorNoise(sequences, o, weighting);
+  ExpectPosition(m, n);
+  ASSERT_FALSE(m.bins.empty());
+  EXPECT_EQ(m.bins.back().min_distance, 100.0);
+  EXPECT_EQ(m.bins.back().count, 25);
+  EXPECT_EQ(m.bins.back().tracks, 1);
+  EXPECT_GT(m.bins.front().tracks, 3);
+  bool noted = false;
+  for (const std::string& note : m.notes) noted = noted || note.find("1 car (need 3)") != std::string::npos;
+  EXPECT_TRUE(noted) << m.BriefReport();
+
+  DetectorNoiseOptions any = o;
+  any.min_bin_tracks = 1;
+  const DetectorNoiseModel flat = EstimateDetectorNoise(sequences, any, weighting);
+  EXPECT_LT(flat.along_sigma_a + flat.along_sigma_b * 45, 0.75 * (n.along_a + n.along_b * 45));
+}
+
 TEST(DetectorNoiseSelf, SizeAndYawAloneRecovered) {
   TrueNoise n = SizeNoise();
   n.yaw_deg = 4.0;
@@ -408,6 +454,13 @@ TEST(DetectorNoiseModelFile, RoundTripAndClearErrors) {
   j = nlohmann::json::parse(m.ToJson());
   j["distance_bins"][0]["mean_distance"] = 500.0;
   test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"distance_bins[0].mean_distance"});
+  // The bins' track counts: optional (0 when absent), at most the bin's detections.
+  EXPECT_GT(back.bins.front().tracks, 1);
+  j = nlohmann::json::parse(m.ToJson());
+  for (auto& bin : j["distance_bins"]) bin.erase("tracks");
+  EXPECT_EQ(ReadDetectorNoiseModel(write(j.dump())).bins.front().tracks, 0);
+  j["distance_bins"][0]["tracks"] = j["distance_bins"][0]["count"].get<int>() + 1;
+  test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"detector.json", "distance_bins[0]", "tracks"});
   j = nlohmann::json::parse(m.ToJson());
   j["miss_rate"] = 1.5;
   test::ExpectError([&] { ReadDetectorNoiseModel(write(j.dump())); }, {"miss_rate"});
