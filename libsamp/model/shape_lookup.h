@@ -71,8 +71,9 @@ class ShapeLookup {
     }
     int i0[3];
     for (int a = 0; a < 3; ++a) {
+      // point >= lo, so u >= 0 and int() floors it (as Locate's clamped cell).
       const double u = (point[a] - lo[a]) * inv_voxel_;
-      const int i = std::min(std::max(int(u), 0), grid_.dims[a] - 2);
+      const int i = std::min(int(u), grid_.dims[a] - 2);
       i0[a] = i;
       cell->f[a] = u - i;
     }
