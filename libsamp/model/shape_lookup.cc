@@ -215,7 +215,7 @@ void InsideSlices(const GridSpec& grid, const T* values, Negative negative, std:
   }
 }
 
-// The per-thread dense grid of the last code asked for.
+// A per-thread dense grid and its code (DenseCached keeps two).
 struct DenseCache {
   uint64_t owner = 0;
   std::vector<double> code;
@@ -359,11 +359,19 @@ double ShapeLookup::EvaluateDenseValueOutside(const double* phi, const double* p
 }
 
 const double* ShapeLookup::DenseCached(const double* z) const {
-  thread_local DenseCache cache;
+  // The two most recent grids; slots[last] the most recent one.
+  thread_local DenseCache slots[2];
+  thread_local int last = 0;
   const size_t nr = size_t(num_components_);
-  if (cache.owner == id_ && cache.code.size() == nr && std::equal(z, z + nr, cache.code.begin())) {
-    return cache.phi.data();
+  for (const int k : {last, 1 - last}) {
+    const DenseCache& cache = slots[k];
+    if (cache.owner == id_ && cache.code.size() == nr && std::equal(z, z + nr, cache.code.begin())) {
+      last = k;
+      return cache.phi.data();
+    }
   }
+  last = 1 - last;  // the older slot takes the new grid
+  DenseCache& cache = slots[last];
   const size_t d = mean_.size();
   cache.owner = 0;  // invalid while being filled
   cache.code.assign(z, z + nr);

@@ -41,9 +41,10 @@ class ShapeLookup {
                   Eigen::Vector3d* d_point = nullptr, Eigen::VectorXd* d_z = nullptr) const;
 
   // phi_z on the whole grid (D doubles, GridSpec::Index order), computed on
-  // the first call for a code and cached per thread (one code per thread), so
-  // the frame blocks of one Ceres evaluation share it. The pointer is valid
-  // until the same thread asks for another code (or another lookup's).
+  // the first call for a code and cached per thread (the thread's last two
+  // codes), so the frame blocks of one Ceres evaluation share it and the code
+  // of a step is still there after a rejected trial step. The pointer is
+  // valid until the same thread asks for another code (or another lookup's).
   const double* DenseCached(const double* z) const;
 
   // phi_z(point) from a dense grid `phi` = DenseCached(z), with optional
