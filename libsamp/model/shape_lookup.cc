@@ -137,12 +137,21 @@ void DenseAnyR(const float* mean, const float* components, int num_components, c
 
 // phi_z = mu + W z at voxel v, as DenseKernel computes it (the same sum in
 // the same order, then cast to float).
+// kR > 0 fixes R at compile time.
+template <int kR>
+inline float VoxelValueR(const float* mean, const float* components, int num_components, const double* z,
+                         int64_t v) {
+  const int nr = kR > 0 ? kR : num_components;
+  const float* row = components + size_t(v) * size_t(nr);
+  double s = mean[v];
+  for (int r = 0; r < nr; ++r) s += double(row[r]) * z[r];
+  return float(s);
+}
+
 inline float VoxelValue(const float* mean, const float* components, int num_components, const double* z,
                         int64_t v) {
-  const float* row = components + size_t(v) * size_t(num_components);
-  double s = mean[v];
-  for (int r = 0; r < num_components; ++r) s += double(row[r]) * z[r];
-  return float(s);
+  return num_components == 5 ? VoxelValueR<5>(mean, components, 5, z, v)
+                             : VoxelValueR<0>(mean, components, num_components, z, v);
 }
 
 // The inside box from the slices along each axis that hold an inside voxel
@@ -200,13 +209,17 @@ template <typename T, typename Negative>
 void InsideSlices(const GridSpec& grid, const T* values, Negative negative, std::vector<uint8_t>* has) {
   const Eigen::Vector3i& n = grid.dims;
   for (int a = 0; a < 3; ++a) has[a].assign(size_t(n[a]), 0);
+  // Locals: stores through has_x may alias anything, so the row loop reads
+  // nothing else from memory.
+  const int nx = n.x();
+  uint8_t* const has_x = has[0].data();
   for (int k = 0; k < n.z(); ++k) {
     for (int j = 0; j < n.y(); ++j) {
       const T* row = values + grid.Index(0, j, k);
       uint8_t any = 0;
-      for (int i = 0; i < n.x(); ++i) {
+      for (int i = 0; i < nx; ++i) {
         const uint8_t inside = negative(row[i]);
-        has[0][size_t(i)] |= inside;
+        has_x[i] |= inside;
         any |= inside;
       }
       has[1][size_t(j)] |= any;
@@ -430,11 +443,13 @@ bool ShapeLookup::LineariseInsideBoxSize(const Eigen::VectorXd& z, double step,
   thread_local std::vector<uint8_t> negative;
   thread_local std::vector<int64_t> band;
   negative.resize(d);
-  for (size_t v = 0; v < d; ++v) negative[v] = float(base[v]) < 0.0f;
+  // The buffer through a local pointer: the loops then skip the thread-local lookup.
+  uint8_t* const is_negative = negative.data();
+  for (size_t v = 0; v < d; ++v) is_negative[v] = float(base[v]) < 0.0f;
   std::vector<uint8_t> has[3], core_has[3];
-  InsideSlices(grid_, negative.data(), [](uint8_t v) { return v != 0; }, has);
+  InsideSlices(grid_, is_negative, [](uint8_t v) { return v != 0; }, has);
   const AlignedBox box = BoxFromSlices(
-      grid_, has, [&](int64_t v) { return negative[size_t(v)] != 0; },
+      grid_, has, [&](int64_t v) { return is_negative[size_t(v)] != 0; },
       [&](int64_t v) { return float(base[size_t(v)]); });
   if (box.IsEmpty()) return false;
   out->size = box.Size();
@@ -457,11 +472,11 @@ bool ShapeLookup::LineariseInsideBoxSize(const Eigen::VectorXd& z, double step,
   for (size_t v = 0; v < d; ++v) {
     const double s = base[v];
     if (s > widest + margin) {
-      negative[v] = 0;
+      is_negative[v] = 0;
       continue;
     }
     if (s < -widest - margin) {
-      negative[v] = 1;
+      is_negative[v] = 1;
       continue;
     }
     const float* row = &components_[v * size_t(nr)];
@@ -470,16 +485,16 @@ bool ShapeLookup::LineariseInsideBoxSize(const Eigen::VectorXd& z, double step,
       reach = std::max(reach, std::abs(double(row[i])) * std::max(plus_step[i], minus_step[i]));
     }
     if (s > reach + margin) {
-      negative[v] = 0;
+      is_negative[v] = 0;
     } else if (s < -reach - margin) {
-      negative[v] = 1;
+      is_negative[v] = 1;
     } else {
       band.push_back(int64_t(v));
-      negative[v] = 0;
+      is_negative[v] = 0;
     }
   }
   // The core's slices (the band's voxels are still unset).
-  InsideSlices(grid_, negative.data(), [](uint8_t v) { return v != 0; }, core_has);
+  InsideSlices(grid_, is_negative, [](uint8_t v) { return v != 0; }, core_has);
   const int64_t nx = grid_.dims.x(), nxy = nx * grid_.dims.y();
 
   auto box_at = [&](const Eigen::VectorXd& code, int i, double taken) {
@@ -495,7 +510,7 @@ bool ShapeLookup::LineariseInsideBoxSize(const Eigen::VectorXd& z, double step,
       } else {
         inside = VoxelValue(mean_.data(), components_.data(), nr, code.data(), v) < 0.0f;
       }
-      negative[size_t(v)] = inside;
+      is_negative[size_t(v)] = inside;
       if (inside) {
         const int64_t k = v / nxy, j = (v - k * nxy) / nx;
         has[0][size_t(v - k * nxy - j * nx)] = 1;
@@ -504,7 +519,7 @@ bool ShapeLookup::LineariseInsideBoxSize(const Eigen::VectorXd& z, double step,
       }
     }
     return BoxFromSlices(
-        grid_, has, [&](int64_t v) { return negative[size_t(v)] != 0; },
+        grid_, has, [&](int64_t v) { return is_negative[size_t(v)] != 0; },
         [&](int64_t v) { return VoxelValue(mean_.data(), components_.data(), nr, code.data(), v); });
   };
   for (int i = 0; i < nr; ++i) {
