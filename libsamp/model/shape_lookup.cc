@@ -125,11 +125,47 @@ void DenseKernel(const float* mean, const float* components, int num_components,
   }
 }
 
+#ifdef __SSE2__
+// DenseKernel<5> two voxels at a time: lane k sums voxel v + k with
+// DenseKernel's products in its order, so the same bits.
+template <typename Out>
+void DenseKernel5(const float* mean, const float* components, const double* z, size_t d, Out* out) {
+  const __m128d z0 = _mm_set1_pd(z[0]), z1 = _mm_set1_pd(z[1]), z2 = _mm_set1_pd(z[2]);
+  const __m128d z3 = _mm_set1_pd(z[3]), z4 = _mm_set1_pd(z[4]);
+  // Two floats at p as doubles.
+  auto load2 = [](const float* p) {
+    return _mm_cvtps_pd(_mm_castsi128_ps(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p))));
+  };
+  size_t v = 0;
+  for (; v + 2 <= d; v += 2) {
+    // w0 .. w9: the rows of voxels v and v + 1.
+    const float* rows = components + v * 5;
+    const __m128 w0123 = _mm_loadu_ps(rows), w4567 = _mm_loadu_ps(rows + 4);
+    const __m128d w01 = _mm_cvtps_pd(w0123), w23 = _mm_cvtps_pd(_mm_movehl_ps(w0123, w0123));
+    const __m128d w45 = _mm_cvtps_pd(w4567), w67 = _mm_cvtps_pd(_mm_movehl_ps(w4567, w4567));
+    const __m128d w89 = load2(rows + 8);
+    __m128d s = load2(mean + v);
+    s = _mm_add_pd(s, _mm_mul_pd(_mm_shuffle_pd(w01, w45, 2), z0));  // (w0, w5)
+    s = _mm_add_pd(s, _mm_mul_pd(_mm_shuffle_pd(w01, w67, 1), z1));  // (w1, w6)
+    s = _mm_add_pd(s, _mm_mul_pd(_mm_shuffle_pd(w23, w67, 2), z2));  // (w2, w7)
+    s = _mm_add_pd(s, _mm_mul_pd(_mm_shuffle_pd(w23, w89, 1), z3));  // (w3, w8)
+    s = _mm_add_pd(s, _mm_mul_pd(_mm_shuffle_pd(w45, w89, 2), z4));  // (w4, w9)
+    out[v] = Out(_mm_cvtsd_f64(s));
+    out[v + 1] = Out(_mm_cvtsd_f64(_mm_unpackhi_pd(s, s)));
+  }
+  if (v < d) DenseKernel<5>(mean + v, components + v * 5, 5, z, d - v, out + v);
+}
+#endif
+
 template <typename Out>
 void DenseAnyR(const float* mean, const float* components, int num_components, const double* z, size_t d,
                Out* out) {
   switch (num_components) {
+#ifdef __SSE2__
+    case 5: return DenseKernel5(mean, components, z, d, out);
+#else
     case 5: return DenseKernel<5>(mean, components, 5, z, d, out);
+#endif
     case 10: return DenseKernel<10>(mean, components, 10, z, d, out);
     default: return DenseKernel<0>(mean, components, num_components, z, d, out);
   }

@@ -126,6 +126,29 @@ TEST(ShapeLookup, EvaluateMatchesBruteForceTrilinear) {
   }
 }
 
+// The dense grids hold mu_v + sum_r W_vr z_r summed in that order (as
+// Evaluate sums a corner), bit for bit, for R = 5 (its two-voxel kernel) on an
+// even and an odd number of voxels.
+TEST(ShapeLookup, DenseGridsSumEachVoxelInOrder) {
+  ShapeModel odd = RandomModel(5, 3);
+  odd.grid.dims = Eigen::Vector3i(7, 5, 3);
+  odd.mean.conservativeResize(odd.grid.NumVoxels());
+  odd.components.conservativeResize(odd.grid.NumVoxels(), 5);
+  for (const ShapeModel& model : {RandomModel(5, 3), odd}) {
+    const ShapeLookup lookup(model);
+    Eigen::VectorXd z(5);
+    z << 0.7, -1.3, 0.4, 2.1, -0.05;
+    const double* dense = lookup.DenseCached(z.data());
+    const std::vector<float> dense_float = lookup.Dense(z);
+    for (int64_t v = 0; v < model.NumVoxels(); ++v) {
+      double s = model.mean[v];
+      for (int r = 0; r < 5; ++r) s += double(model.components(v, r)) * z[r];
+      EXPECT_EQ(dense[v], s) << v;
+      EXPECT_EQ(dense_float[size_t(v)], float(s)) << v;
+    }
+  }
+}
+
 // Reference for InsideBox: every inside voxel and its crossings towards
 // outside neighbours along each axis (linear interpolation), all voxels scanned.
 AlignedBox InsideBoxByFullScan(const ShapeLookup& lookup, const Eigen::VectorXd& z) {
