@@ -101,10 +101,9 @@ struct FitOptions {
   // frame's origin from its detection) a detected position does not pull;
   // beyond, the term grows as (m - k)^2 instead of m^2 (DeadZoneLoss,
   // costs/detection_position.h). The term then picks the minimum of the data
-  // term near the detection without pulling the fit inside it; 0 = the plain
-  // Gaussian term (the default: docs/results.md, "The detected-position term
-  // across detectors", says what 1 does).
-  double detection_position_dead_zone = 0.0;
+  // term near the detection without pulling the fit inside it (docs/results.md,
+  // "The detected-position term across detectors"); 0 = the plain Gaussian term.
+  double detection_position_dead_zone = 1.0;
   // A detector errs the same way for a few frames: consecutive detections'
   // errors correlate as exp(-1 / tau), tau = this many frames (0 = white), so a
   // track's T detections count T (1 - rho) / (1 + rho) independent ones

@@ -13,7 +13,7 @@
 // detector saw it when its few visible points fit a shape in several places
 // (the visible top of a car behind another fits a shape with its cabin moved
 // along the body as well as the true one).
-// With FitOptions::detection_position_dead_zone > 0 (off by default), within
+// With FitOptions::detection_position_dead_zone > 0 (1 by default), within
 // that many sigmas of its detection a frame's origin feels no pull
 // (DeadZoneLoss below): the term still keeps a fit from a minimum of the data
 // term metres away, but does not drag it within the detector's own
