@@ -14,7 +14,7 @@
 // drifting error and tr M is smaller. ShrinkageScale undoes this:
 // r * sqrt(n / sum_i M_ii) has the variance of e. rho is not known: it is
 // found by matching the residuals' pooled lag-1 product sum over their
-// squares with the same ratio of M (EstimateFrameCorrelation).
+// squares with its expectation under M (EstimateFrameCorrelation).
 #pragma once
 
 #include <Eigen/Core>
@@ -43,7 +43,8 @@ ResidualMoments ExpectedResidualMoments(const SmoothedSeries& series, double rho
 double ShrinkageScale(const SmoothedSeries& series, double rho);
 
 struct FrameCorrelationOptions {
-  // Residuals beyond trim_sigmas robust sigmas of the pooled residuals do not enter.
+  // Residuals beyond trim_sigmas robust sigmas of the pooled residuals do not
+  // enter (and the expected moments are those of the kept ones).
   double trim_sigmas = 3.0;
   // Searched in [0, max_rho] on a grid of 5 x step, then of `step` around the best point.
   double max_rho = 0.95, step = 0.01;
@@ -63,9 +64,12 @@ struct FrameCorrelation {
 // residual is 0.
 void NormaliseSeries(std::vector<SmoothedSeries>* series);
 
-// The rho in [0, max_rho] whose expected ratio sum M(i, i+1) / sum M_ii over
-// the used residuals of every series (pairs of consecutive frames only)
-// is nearest to the observed sum r_i r_{i+1} / sum r_i^2.
+// The rho in [0, max_rho] whose expected ratio of sum r_i r_{i+1} (pairs of
+// consecutive frames) to sum r_i^2 over the used residuals within the trim
+// is nearest to the observed one. The expectations are those of normal
+// residuals with covariance M given that the trim kept them, so the trim,
+// which keeps the small residuals and their small neighbours, does not bias
+// rho low.
 FrameCorrelation EstimateFrameCorrelation(const std::vector<SmoothedSeries>& series,
                                           const FrameCorrelationOptions& options = FrameCorrelationOptions());
 
