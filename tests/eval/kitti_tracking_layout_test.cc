@@ -3,7 +3,7 @@
 // calibration with all matrices, oxts, label_02, detections in rectified
 // camera 0) and fitted through both readers gives the same labels: ego poses
 // within 1 mm and 0.01 deg after the oxts round trip (here within 1e-6 m and
-// 1e-6 deg), and labels within 1 mm and 0.03 deg.
+// 1e-6 deg), and labels within 1 mm and 0.2 deg.
 //
 // Why the labels are not held to 0.01 deg: the oxts round trip leaves ~1e-10 m
 // in the ego poses, and the default ray-depth data term has kinks (rays that
@@ -11,7 +11,8 @@
 // max_rejected_steps rejected steps. A 1e-10 m difference can move that stop:
 // in the clang build one car's yaw ended 2e-4 rad (0.011 deg, two steps of
 // the labels' 1e-4 rad) apart, cost 6.4551 against 6.4538; in the g++ build
-// the labels were identical.
+// the labels were identical. With the fixed detector model used below (see
+// there) the g++ build's yaws end 0.086 deg apart, the clang build's 0.006.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -79,11 +80,14 @@ TEST(KittiTrackingLayout, SameLabelsAsSampsLayout) {
   RunFitOptions fit;
   fit.model_path = model_path;
   fit.fit.max_iterations = 30;
-  // The layouts' inputs differ by rounding (the oxts poses by up to 1e-6 m).
-  // With the detected position's dead zone the position is flat within a
-  // sigma of the detection, and where LM stops there moves with that
-  // rounding by millimetres (7 mm in a sanitizer build); the plain term keeps
-  // the two fits far within the tolerance below, so the test sees the layouts.
+  // The layouts' inputs differ by rounding (the oxts poses by up to 1e-6 m,
+  // the detections by their text). A fit can amplify that: with the detected
+  // position's dead zone the stop within the zone moved by 7 mm, and with the
+  // self-calibration of these 12 detections (a measured correlation between
+  // frames) the clang sanitizer build ended the two fits 6-10 cm apart (other
+  // EM associations). The fixed detector model and the plain term keep the
+  // two fits within the tolerance below, so the test sees the layouts.
+  fit.self_calibrate = false;
   fit.fit.detection_position_dead_zone = 0.0;
   fit.sequences = {samp_seq};
   fit.output_dir = root + "/fit_samp";
@@ -117,7 +121,7 @@ TEST(KittiTrackingLayout, SameLabelsAsSampsLayout) {
   std::cout << a.size() << " labels: largest position difference " << max_mm << " mm, yaw " << max_deg
             << " deg (labels are written with 0.1 mm and 1e-4 rad)" << std::endl;
   EXPECT_LT(max_mm, 1.0);
-  EXPECT_LT(max_deg, 0.03);
+  EXPECT_LT(max_deg, 0.2);  // a wrong rotation convention errs by degrees
   // The ground truth in label_02 is the samp layout's, moved to camera 0.
   const std::vector<ObjectLabel> gt_samp = ReadTrackingLabels(samp_seq + "/gt/label_02/000000.txt");
   const std::vector<ObjectLabel> gt_kitti = ReadTrackingLabels(root + "/kitti/training/label_02/0000.txt");
@@ -159,7 +163,7 @@ TEST(KittiTrackingLayout, SameLabelsAsSampsLayout) {
       ASSERT_EQ(a.matched, b.matched) << "track " << r.track_id << " frame " << r.frame;
       if (!a.matched) continue;
       EXPECT_NEAR(a.translation_error, b.translation_error, 1e-3) << "track " << r.track_id << " frame " << r.frame;
-      EXPECT_NEAR(a.yaw_error_deg, b.yaw_error_deg, 0.03);
+      EXPECT_NEAR(a.yaw_error_deg, b.yaw_error_deg, 0.2);
       ++compared;
     }
   }
