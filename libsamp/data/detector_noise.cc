@@ -48,13 +48,6 @@ double Median(std::vector<double> v) {
   return m;
 }
 
-// Var[z | |z| < k] of a standard normal z.
-double TruncatedVariance(double k) {
-  if (k <= 1e-6) return 0.0;
-  const double phi = std::exp(-0.5 * k * k) / std::sqrt(2 * kPi);
-  return 1.0 - 2.0 * k * phi / std::erf(k / std::sqrt(2.0));
-}
-
 RobustEstimate Robust(const std::vector<double>& values, double trim, const std::vector<double>& limits = {}) {
   RobustEstimate r;
   r.count = static_cast<int>(values.size());
@@ -65,7 +58,7 @@ RobustEstimate Robust(const std::vector<double>& values, double trim, const std:
   deviations.reserve(values.size());
   for (double v : values) deviations.push_back(std::abs(v - r.center));
   r.sigma = 1.4826 * Median(deviations);
-  const double ungated_variance = TruncatedVariance(trim);
+  const double ungated_variance = TruncatedNormalVariance(trim);
   for (int round = 0; round < (gated ? 20 : 5) && r.sigma > 0; ++round) {
     auto half_width = [&](size_t i) {
       return gated ? std::min(trim * r.sigma, limits[i] - std::abs(r.center)) : trim * r.sigma;
@@ -76,7 +69,7 @@ RobustEstimate Robust(const std::vector<double>& values, double trim, const std:
       const double h = half_width(i);
       if (h > 0 && std::abs(values[i] - r.center) <= h) {
         sum += values[i], ++n;
-        expected += gated ? TruncatedVariance(h / r.sigma) : ungated_variance;
+        expected += gated ? TruncatedNormalVariance(h / r.sigma) : ungated_variance;
       }
     }
     if (n < 2 || expected <= 0) break;

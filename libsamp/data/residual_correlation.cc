@@ -48,12 +48,6 @@ constexpr double kInvSqrt2Pi = 0.3989422804014327;
 double Density(double z) { return kInvSqrt2Pi * std::exp(-0.5 * z * z); }
 double Cumulative(double z) { return 0.5 * std::erfc(-z / std::sqrt(2.0)); }
 
-// Moments of a standard normal z kept within |z| <= k: P(|z| <= k) and E[z^2; |z| <= k].
-void KeptMoments(double k, double* probability, double* square) {
-  *probability = std::erf(k / std::sqrt(2.0));
-  *square = *probability - 2.0 * k * Density(k);
-}
-
 // Moments of a standard bivariate normal (u, v) with correlation r kept within
 // |u| <= h and |v| <= k: P(both kept) and E[u v; both kept]. Given u, v is
 // normal with mean r u and variance 1 - r^2, so the inner integral over v is
@@ -80,6 +74,11 @@ void KeptPairMoments(double r, double h, double k, double* probability, double* 
 }
 
 }  // namespace
+
+double TruncatedNormalVariance(double k) {
+  if (k <= 1e-6) return 0.0;
+  return 1.0 - 2.0 * k * Density(k) / std::erf(k / std::sqrt(2.0));
+}
 
 // M = C - H C - C H^T + H C H^T with H = A G A^T W, G = (A^T W A)^-1:
 // with P = G A^T W C (q x n) and Q = P W A G (q x q),
@@ -165,8 +164,8 @@ FrameCorrelation EstimateFrameCorrelation(const std::vector<SmoothedSeries>& ser
   // The gap between the expected ratio at rho and the observed one. The
   // trim keeps the small residuals, whose products with their neighbours are
   // smaller than the correlation says; so the expected sums are the
-  // moments of normal residuals given that they were kept (KeptMoments,
-  // KeptPairMoments), at the residuals' scale s that makes the kept squares
+  // moments of normal residuals given that they were kept
+  // (TruncatedNormalVariance, KeptPairMoments), at the residuals' scale s that makes the kept squares
   // match (the trim's limit is s k_i sqrt(M_ii) for each residual).
   auto gap = [&](double rho) {
     std::vector<ResidualMoments> moments;
@@ -182,9 +181,7 @@ FrameCorrelation EstimateFrameCorrelation(const std::vector<SmoothedSeries>& ser
       for (size_t t = 0; t < series.size(); ++t)
         for (size_t i = 0; i < kept[t].size(); ++i) {
           if (!kept[t][i]) continue;
-          double p, square;
-          KeptMoments(within(t, i, scale), &p, &square);
-          sum += moments[t].diagonal[i] * square / std::max(p, 1e-12);
+          sum += moments[t].diagonal[i] * TruncatedNormalVariance(within(t, i, scale));
         }
       return sum;
     };

@@ -58,6 +58,10 @@ struct FrameCorrelation {
   bool measured = false;  // at least min_pairs pairs (else rho = 0)
 };
 
+// Var[z | |z| <= k] of a standard normal z (0 for k <= 0): what a trim at k
+// standard deviations leaves of a unit variance.
+double TruncatedNormalVariance(double k);
+
 // Divides the residuals of `series` (one cue) by their robust sigma, 1.4826
 // times the median |r_i| of the used ones, so that cues in different units
 // can enter one EstimateFrameCorrelation together. No change when every used
