@@ -92,7 +92,7 @@ OptionTable<FitOptions> MakeFitTable() {
   t.AddOptional("detection_along_bias", &F::detection_along_bias,
                 "the detector's systematic error of the box position along the viewing ray, m (> 0: too far)");
   t.Add("detection_correlation_frames", &F::detection_correlation_frames,
-        "tau of the detector's AR(1) errors exp(-1/tau), frames; 0 = independent (self-calibration: as measured)")
+        "tau of the detector's AR(1) errors exp(-1/tau), frames, for the detected-position term and the initial speed's significance; 0 = independent (self-calibration: as measured)")
       .NonNegative()
       .Deprecated("detection-correlation");
   t.Add("detection_position", &F::detection_position,

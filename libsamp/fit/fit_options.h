@@ -107,8 +107,9 @@ struct FitOptions {
   // A detector errs the same way for a few frames: consecutive detections'
   // errors correlate as exp(-1 / tau), tau = this many frames (0 = white), so a
   // track's T detections count T (1 - rho) / (1 + rho) independent ones
-  // (an AR(1) mean). Default: the 3 frames of the synthetic detector model
-  // (docs/synthetic.md).
+  // (an AR(1) mean), and the initial speed's significance counts the drift
+  // such errors make (docs/fitting.md "Initialisation"). Default: the 3
+  // frames of the synthetic detector model (docs/synthetic.md).
   double detection_correlation_frames = 3.0;
   // Motion-model thresholds: |v| < standing_speed -> standing (m/s);
   // |omega| < straight_yaw_rate -> straight line (rad/s), else circular arc.

@@ -26,13 +26,56 @@ double AlignYaw(double yaw, double reference) {
   return std::abs(WrapAngle(yaw - reference)) > kPi / 2 ? WrapAngle(yaw + kPi) : WrapAngle(yaw);
 }
 
+// Position errors correlated in time as rho^lag (rho = exp(-1 /
+// correlation_frames), lag in frame periods: the median time step): the
+// variances of the least-squares mean and slope over the frames' times,
+// each divided by its value for white errors,
+//   mean:  sum_ij rho^lag_ij / n,   slope:  sum_ij w_i w_j rho^lag_ij / sum_i w_i^2,
+// w_i = t_i - mean t. Both are 1 for white errors. Correlated errors drift
+// together: a white-noise significance overstates a speed (at 3 frames and
+// 21 frames the slope's variance is ~5x), and the scatter about the fitted
+// line understates the errors (its expected sum of squares is
+// sigma^2 (n - mean - slope) instead of sigma^2 (n - 2)).
+struct CorrelationFactors {
+  double mean = 1.0, slope = 1.0;
+};
+CorrelationFactors CorrelatedFitFactors(const Track& track, double correlation_frames) {
+  const int n = int(track.frames.size());
+  CorrelationFactors factors;
+  if (correlation_frames <= 0.0 || n < 3) return factors;
+  std::vector<double> steps;
+  double t_mean = 0.0;
+  for (int k = 0; k < n; ++k) {
+    t_mean += track.frames[k].time / n;
+    if (k > 0) steps.push_back(track.frames[k].time - track.frames[k - 1].time);
+  }
+  const double period = Median(steps);
+  if (!(period > 0.0)) return factors;
+  double white = 0.0, mean = 0.0, slope = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const double wi = track.frames[i].time - t_mean;
+    white += wi * wi;
+    for (int j = 0; j < n; ++j) {
+      const double lag = std::abs(track.frames[i].time - track.frames[j].time) / period;
+      const double r = std::exp(-lag / correlation_frames);
+      mean += r;
+      slope += wi * (track.frames[j].time - t_mean) * r;
+    }
+  }
+  factors.mean = std::max(mean / n, 1.0);
+  if (white > 0.0) factors.slope = std::max(slope / white, 1.0);
+  return factors;
+}
+
 // Velocity on the road by Theil-Sen: per world axis the median over all
 // pairs of detections (i < j) of (p_j - p_i) / (t_j - t_i). Unlike the
 // median of pairwise speeds (norms, biased upwards by noise) it is ~0 for a
 // standing car, and one flipped or displaced detection does not move it.
-// *speed_sigma: the standard deviation of its speed (>= 2 frames, else 0).
+// *speed_sigma: the standard deviation of its speed (>= 2 frames, else 0),
+// for position errors correlated in time as exp(-lag / correlation_frames)
+// (0: white).
 Eigen::Vector3d TheilSenVelocity(const Track& track, const std::vector<Eigen::Vector3d>& positions,
-                                 double* speed_sigma) {
+                                 double correlation_frames, double* speed_sigma) {
   const int num_frames = int(track.frames.size());
   const double t_mean = [&] {
     double sum = 0.0;
@@ -73,12 +116,16 @@ Eigen::Vector3d TheilSenVelocity(const Track& track, const std::vector<Eigen::Ve
   // The larger of a robust (1.4826 MAD) and the plain RMS estimate: with ~20
   // frames either alone is often low by a third, and too low a noise makes
   // scatter look like motion (erring the other way only delays "moving"
-  // for slow, far cars).
+  // for slow, far cars). Both scaled for correlated errors (the scatter's
+  // degrees of freedom n - mean - slope instead of n - 2).
+  const CorrelationFactors factors = CorrelatedFitFactors(track, correlation_frames);
+  const double dof = std::max(num_frames - factors.mean - factors.slope, 1.0);
+  const double correlated_scale = std::sqrt(std::max(num_frames - 2, 1) / dof);
   double sum_sq = 0.0;
   for (double r : residuals) sum_sq += r * r;
   const double position_sigma =
-      std::max(1.4826 * Median(residuals), std::sqrt(sum_sq / std::max(num_frames - 2, 1)));
-  *speed_sigma = position_sigma / std::sqrt(std::max(spread, 1e-12));
+      std::max(1.4826 * Median(residuals) * correlated_scale, std::sqrt(sum_sq / dof));
+  *speed_sigma = position_sigma / std::sqrt(std::max(spread, 1e-12)) * std::sqrt(factors.slope);
   return velocity;
 }
 
@@ -124,7 +171,7 @@ InitialState InitializeTrack(const Track& track, const FitOptions& options) {
     detection_yaws[k] = DetectionYaw(track.frames[k]);
   }
   double velocity_sigma = 0.0;  // of the speed, m/s
-  const Eigen::Vector3d velocity = TheilSenVelocity(track, positions, &velocity_sigma);
+  const Eigen::Vector3d velocity = TheilSenVelocity(track, positions, options.detection_correlation_frames, &velocity_sigma);
   const double speed = velocity.norm();
   const double detected_yaw = DetectedYaw(detection_yaws);
   // Standing when slow, or when the speed is within the noise of its estimate

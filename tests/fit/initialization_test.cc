@@ -96,7 +96,10 @@ TEST(Initialization, KeepsFarStandingCarsStanding) {
   }
   EXPECT_EQ(num_standing, num_trials);
   EXPECT_EQ(num_right, num_trials);
-  // The same noise on a car driving at 5 m/s along its axis: moving, right way round.
+  // The same noise on a car driving at 5 m/s along its axis: moving, right
+  // way round (the noise is white, and so is the options' error model).
+  FitOptions white;
+  white.detection_correlation_frames = 0.0;
   int num_moving = 0;
   for (int trial = 0; trial < num_trials; ++trial) {
     Synthetic mv = MakeTrack(lookup, 21, 5.0, 0.0, 50, 200 + trial);
@@ -104,7 +107,7 @@ TEST(Initialization, KeepsFarStandingCarsStanding) {
     for (TrackFrame& f : mv.track.frames) {
       f.detection.position += f.world_from_camera.linear().transpose() * (noise(rng) * Heading(yaw0));
     }
-    const InitialState init = InitializeTrack(mv.track, FitOptions());
+    const InitialState init = InitializeTrack(mv.track, white);
     num_moving += !init.standing && std::abs(WrapAngle(init.poses[0][3] - yaw0)) < 0.2 &&
                   std::abs(init.velocities[0][0] - 5.0) < 1.5;
   }
@@ -114,6 +117,51 @@ TEST(Initialization, KeepsFarStandingCarsStanding) {
   EXPECT_THROW(bad.Check(), Error);
 }
 
+TEST(Initialization, CorrelatedDetectionErrorsAreNotTakenForMotion) {
+  // A standing car whose detections err along its length axis as an AR(1)
+  // process (rho = exp(-1/3) per frame, 1 m s.d.), as the position errors of
+  // a real detector do: the errors drift together for several frames, which
+  // white-noise significance mistakes for a speed, and the car would get the
+  // drift's heading (backwards in half the cases).
+  const ShapeLookup lookup(Model());
+  const double rho = std::exp(-1.0 / 3.0);
+  auto add_ar1 = [&](Synthetic* s, const Eigen::Vector3d& along_in_world, std::mt19937* rng) {
+    std::normal_distribution<double> n(0.0, 1.0);
+    double e = n(*rng);
+    for (TrackFrame& f : s->track.frames) {
+      f.detection.position += f.world_from_camera.linear().transpose() * (e * along_in_world);
+      e = rho * e + std::sqrt(1.0 - rho * rho) * n(*rng);
+    }
+  };
+  const int num_trials = 100;
+  FitOptions white;
+  white.detection_correlation_frames = 0.0;
+  int standing_white = 0, standing = 0, right = 0;
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < num_trials; ++trial) {
+    Synthetic st = MakeTrack(lookup, 21, 0.0, 0.0, 50, 300 + trial);
+    add_ar1(&st, Heading(0.4), &rng);
+    standing_white += InitializeTrack(st.track, white).standing;
+    const InitialState init = InitializeTrack(st.track, FitOptions());
+    standing += init.standing;
+    right += std::abs(WrapAngle(init.poses[0][3] - 0.4)) < 0.2;
+  }
+  // White-noise significance calls a share of them moving; the default
+  // (errors correlated over 3 frames) at most one in a hundred.
+  EXPECT_LE(standing_white, num_trials - 5);
+  EXPECT_GE(standing, num_trials - 1);
+  EXPECT_GE(right, num_trials - 1);
+  // The same errors on a car driving at 5 m/s: moving, the right way round.
+  int moving = 0;
+  for (int trial = 0; trial < num_trials; ++trial) {
+    Synthetic mv = MakeTrack(lookup, 21, 5.0, 0.0, 50, 400 + trial);
+    const double yaw0 = mv.poses_true[0][3];
+    add_ar1(&mv, Heading(yaw0), &rng);
+    const InitialState init = InitializeTrack(mv.track, FitOptions());
+    moving += !init.standing && std::abs(WrapAngle(init.poses[0][3] - yaw0)) < 0.2;
+  }
+  EXPECT_GE(moving, num_trials - 2);
+}
 
 }  // namespace
 }  // namespace samp
