@@ -149,6 +149,48 @@ TEST(ShapeLookup, DenseGridsSumEachVoxelInOrder) {
   }
 }
 
+// DenseValuePair (two points in SSE2 lanes) returns EvaluateDenseValue's bits
+// at each point: inside the grid box, on its faces and corners, at a sample,
+// outside it (also just outside) and at non-finite points, in either lane.
+TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
+  const ShapeModel model = RandomModel(5, 11);
+  const ShapeLookup lookup(model);
+  Eigen::VectorXd code(5);
+  code << 0.3, -0.8, 1.1, 0.25, -1.7;
+  const double* dense = lookup.DenseCached(code.data());
+  std::vector<Eigen::Vector3d> points = RandomPoints(model.grid, 0.02, 300, 5);
+  for (const Eigen::Vector3d& p : RandomPoints(model.grid, 0.5, 100, 6)) points.push_back(p);
+  const Eigen::Vector3d lo = model.grid.MinCorner(), hi = model.grid.MaxCorner();
+  points.push_back(lo);
+  points.push_back(hi);
+  points.push_back(Eigen::Vector3d(hi.x(), lo.y(), hi.z()));
+  points.push_back(model.grid.Position(3, 2, 1));  // a sample: fractions 0
+  points.push_back(Eigen::Vector3d(std::nextafter(hi.x(), 1e9), 0.0, 0.0));
+  points.push_back(Eigen::Vector3d(std::nextafter(lo.x(), -1e9), 0.0, 0.0));
+  points.push_back(Eigen::Vector3d(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0));
+  points.push_back(Eigen::Vector3d(0.0, std::numeric_limits<double>::infinity(), 0.0));
+  auto bits = [](double v) {
+    uint64_t b;
+    std::memcpy(&b, &v, sizeof(b));
+    return b;
+  };
+  const ShapeLookup::DenseValuePair pair(lookup, dense);
+  int both_inside = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    for (size_t j : {i, (i + 1) % points.size(), (i + 7) % points.size()}) {
+      const double x[2] = {points[i].x(), points[j].x()}, y[2] = {points[i].y(), points[j].y()};
+      const double z[2] = {points[i].z(), points[j].z()};
+      double values[2];
+      pair.Evaluate(x, y, z, values);
+      EXPECT_EQ(bits(values[0]), bits(lookup.EvaluateDenseValue(dense, points[i].data()))) << i << " " << j;
+      EXPECT_EQ(bits(values[1]), bits(lookup.EvaluateDenseValue(dense, points[j].data()))) << i << " " << j;
+      ShapeLookup::DenseCell cell;
+      both_inside += lookup.LocateInside(points[i].data(), &cell) && lookup.LocateInside(points[j].data(), &cell);
+    }
+  }
+  EXPECT_GT(both_inside, 300);
+}
+
 // Reference for InsideBox: every inside voxel and its crossings towards
 // outside neighbours along each axis (linear interpolation), all voxels scanned.
 AlignedBox InsideBoxByFullScan(const ShapeLookup& lookup, const Eigen::VectorXd& z) {
