@@ -202,6 +202,70 @@ class ShapeLookup {
 #endif
     }
 
+    // When both points lie inside the grid box: their cells (LocateInside),
+    // values and d/dpoint (DenseAt(phi, cell, g)), bit for bit, and true.
+    // False otherwise (nothing written), and always without SSE2.
+    bool EvaluateInside(const double* x, const double* y, const double* z, DenseCell* cells, double* values,
+                        double (*g)[3]) const {
+#ifdef __SSE2__
+      const __m128d p[3] = {_mm_loadu_pd(x), _mm_loadu_pd(y), _mm_loadu_pd(z)};
+      // LocateInside's test in both lanes (false for NaN, as there).
+      __m128d inside = _mm_and_pd(_mm_cmpge_pd(p[0], lo_[0]), _mm_cmple_pd(p[0], hi_[0]));
+      for (int a = 1; a < 3; ++a) {
+        inside = _mm_and_pd(inside, _mm_and_pd(_mm_cmpge_pd(p[a], lo_[a]), _mm_cmple_pd(p[a], hi_[a])));
+      }
+      if (_mm_movemask_pd(inside) != 3) return false;
+      __m128d f[3], i[3];
+      for (int a = 0; a < 3; ++a) {
+        const __m128d u = _mm_mul_pd(_mm_sub_pd(p[a], lo_[a]), inv_voxel_);
+        i[a] = _mm_min_pd(_mm_cvtepi32_pd(_mm_cvttpd_epi32(u)), last_cell_[a]);
+        f[a] = _mm_sub_pd(u, i[a]);
+        _mm_storel_pd(&cells[0].f[a], f[a]);
+        _mm_storeh_pd(&cells[1].f[a], f[a]);
+      }
+      const __m128d base = _mm_add_pd(_mm_add_pd(i[0], _mm_mul_pd(nx_lanes_, i[1])), _mm_mul_pd(nxy_lanes_, i[2]));
+      cells[0].base = int64_t(_mm_cvtsd_f64(base));
+      cells[1].base = int64_t(_mm_cvtsd_f64(_mm_unpackhi_pd(base, base)));
+      const double* c0 = phi_ + cells[0].base;
+      const double* c1 = phi_ + cells[1].base;
+      // DenseAt's sums and differences, in both lanes.
+      const __m128d one = _mm_set1_pd(1.0);
+      const __m128d gx = _mm_sub_pd(one, f[0]), gy = _mm_sub_pd(one, f[1]), gz = _mm_sub_pd(one, f[2]);
+      // Row k's corners: first (c[k]) and second (c[k + 1]) in both lanes.
+      __m128d first[4], second[4];
+      const int64_t rows[4] = {0, nx_, nxy_, nxy_ + nx_};
+      for (int k = 0; k < 4; ++k) {
+        const __m128d a = _mm_loadu_pd(c0 + rows[k]), b = _mm_loadu_pd(c1 + rows[k]);
+        first[k] = _mm_unpacklo_pd(a, b);
+        second[k] = _mm_unpackhi_pd(a, b);
+      }
+      auto along_x = [&](int k) { return _mm_add_pd(_mm_mul_pd(gx, first[k]), _mm_mul_pd(f[0], second[k])); };
+      const __m128d c00 = along_x(0), c10 = along_x(1), c01 = along_x(2), c11 = along_x(3);
+      const __m128d cy0 = _mm_add_pd(_mm_mul_pd(gy, c00), _mm_mul_pd(f[1], c10));
+      const __m128d cy1 = _mm_add_pd(_mm_mul_pd(gy, c01), _mm_mul_pd(f[1], c11));
+      const __m128d d2 = _mm_mul_pd(_mm_sub_pd(cy1, cy0), inv_voxel_);
+      const __m128d d1 = _mm_mul_pd(
+          _mm_add_pd(_mm_mul_pd(gz, _mm_sub_pd(c10, c00)), _mm_mul_pd(f[2], _mm_sub_pd(c11, c01))), inv_voxel_);
+      auto dx = [&](int k) { return _mm_sub_pd(second[k], first[k]); };  // c[k + 1] - c[k]
+      const __m128d d0 = _mm_mul_pd(
+          _mm_add_pd(_mm_mul_pd(gz, _mm_add_pd(_mm_mul_pd(gy, dx(0)), _mm_mul_pd(f[1], dx(1)))),
+                     _mm_mul_pd(f[2], _mm_add_pd(_mm_mul_pd(gy, dx(2)), _mm_mul_pd(f[1], dx(3))))),
+          inv_voxel_);
+      const __m128d v = _mm_add_pd(_mm_add_pd(_mm_mul_pd(gz, cy0), _mm_mul_pd(f[2], cy1)), _mm_setzero_pd());
+      _mm_storeu_pd(values, v);
+      _mm_storel_pd(&g[0][0], d0);
+      _mm_storeh_pd(&g[1][0], d0);
+      _mm_storel_pd(&g[0][1], d1);
+      _mm_storeh_pd(&g[1][1], d1);
+      _mm_storel_pd(&g[0][2], d2);
+      _mm_storeh_pd(&g[1][2], d2);
+      return true;
+#else
+      (void)x, (void)y, (void)z, (void)cells, (void)values, (void)g;
+      return false;
+#endif
+    }
+
    private:
     const ShapeLookup& lookup_;
     const double* phi_;

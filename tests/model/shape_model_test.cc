@@ -151,7 +151,9 @@ TEST(ShapeLookup, DenseGridsSumEachVoxelInOrder) {
 
 // DenseValuePair (two points in SSE2 lanes) returns EvaluateDenseValue's bits
 // at each point: inside the grid box, on its faces and corners, at a sample,
-// outside it (also just outside) and at non-finite points, in either lane.
+// outside it (also just outside) and at non-finite points, in either lane;
+// with both points inside, EvaluateInside returns LocateInside's cells and
+// DenseAt's values and gradients bit for bit (with SSE2).
 TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
   const ShapeModel model = RandomModel(5, 11);
   const ShapeLookup lookup(model);
@@ -184,8 +186,31 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
       pair.Evaluate(x, y, z, values);
       EXPECT_EQ(bits(values[0]), bits(lookup.EvaluateDenseValue(dense, points[i].data()))) << i << " " << j;
       EXPECT_EQ(bits(values[1]), bits(lookup.EvaluateDenseValue(dense, points[j].data()))) << i << " " << j;
-      ShapeLookup::DenseCell cell;
-      both_inside += lookup.LocateInside(points[i].data(), &cell) && lookup.LocateInside(points[j].data(), &cell);
+      // EvaluateInside: the cells, values and gradients of LocateInside and
+      // DenseAt when both points lie inside the box, else false.
+      ShapeLookup::DenseCell cells[2], cell_i, cell_j;
+      double g[2][3];
+      const bool inside =
+          lookup.LocateInside(points[i].data(), &cell_i) && lookup.LocateInside(points[j].data(), &cell_j);
+      both_inside += inside;
+      const bool lanes = pair.EvaluateInside(x, y, z, cells, values, g);
+#ifdef __SSE2__
+      ASSERT_EQ(lanes, inside) << i << " " << j;
+#else
+      ASSERT_FALSE(lanes);  // the scalar path is the caller's
+#endif
+      if (!lanes) continue;
+      for (int k = 0; k < 2; ++k) {
+        const ShapeLookup::DenseCell& cell = k == 0 ? cell_i : cell_j;
+        double g_ref[3];
+        const double value = lookup.DenseAt(dense, cell, g_ref);
+        EXPECT_EQ(cells[k].base, cell.base);
+        EXPECT_EQ(bits(values[k]), bits(value)) << i << " " << j;
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_EQ(bits(cells[k].f[a]), bits(cell.f[a])) << i << " " << j;
+          EXPECT_EQ(bits(g[k][a]), bits(g_ref[a])) << i << " " << j;
+        }
+      }
     }
   }
   EXPECT_GT(both_inside, 300);

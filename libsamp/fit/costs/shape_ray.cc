@@ -213,6 +213,79 @@ inline void SampleSlots(const ShapeLookup& lookup, const ShapeLookup::DenseValue
   }
 }
 
+// RefineCrossing for several crossings: in origin, direction, the bracket
+// [lo, hi] and phi there; out t (RefineCrossing's return), c, g_c, cell and
+// in_cell. Each job's result equals RefineCrossing's bit for bit.
+struct Refinement {
+  const double* origin;
+  const double* direction;
+  double lo, hi, v_lo, v_hi;
+  double t, c[3], g_c[3];
+  ShapeLookup::DenseCell cell;
+  bool in_cell;
+};
+
+// RefineCrossing's Newton steps of the jobs in two lockstep slots, their
+// values and gradients two at a time when both points lie inside the grid
+// box (ShapeLookup::DenseValuePair::EvaluateInside), else one at a time.
+void RefineCrossings(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair& pair, const double* phi_z,
+                     Refinement* jobs, int n) {
+  const double tolerance = 1e-9 * lookup.grid().voxel_size;
+  int slot_job[2], step[2], num_slots = 0, next = 0;
+  auto start = [&](int s) {
+    Refinement& j = jobs[next];
+    j.t = j.lo + (j.hi - j.lo) * j.v_lo / (j.v_lo - j.v_hi);
+    slot_job[s] = next++;
+    step[s] = 0;
+  };
+  while (num_slots < 2 && next < n) start(num_slots++);
+  while (num_slots > 0) {
+    double x[2], y[2], z[2], v[2];
+    for (int s = 0; s < num_slots; ++s) {
+      Refinement& j = jobs[slot_job[s]];
+      PointOnRay(j.origin, j.direction, j.t, j.c);
+      x[s] = j.c[0];
+      y[s] = j.c[1];
+      z[s] = j.c[2];
+    }
+    ShapeLookup::DenseCell cells[2];
+    double g[2][3];
+    if (num_slots == 2 && pair.EvaluateInside(x, y, z, cells, v, g)) {
+      for (int s = 0; s < 2; ++s) {
+        Refinement& j = jobs[slot_job[s]];
+        j.cell = cells[s];
+        j.in_cell = true;
+        for (int a = 0; a < 3; ++a) j.g_c[a] = g[s][a];
+      }
+    } else {
+      for (int s = 0; s < num_slots; ++s) {
+        Refinement& j = jobs[slot_job[s]];
+        v[s] = ValueAndGradient(lookup, phi_z, j.c, j.g_c, &j.cell, &j.in_cell);
+      }
+    }
+    for (int s = 0; s < num_slots;) {
+      Refinement& j = jobs[slot_job[s]];
+      const double* d = j.direction;
+      const double slope = j.g_c[0] * d[0] + j.g_c[1] * d[1] + j.g_c[2] * d[2];
+      if (!(step[s] == kNewtonSteps || std::abs(v[s]) <= tolerance || slope == 0.0 || !std::isfinite(slope))) {
+        j.t = std::min(std::max(j.t - v[s] / slope, j.lo), j.hi);
+        ++step[s];
+        ++s;
+        continue;
+      }
+      // Done: the next job takes the slot, else the last slot's job.
+      if (next < n) {
+        start(s);
+        ++s;
+      } else if (--num_slots > s) {
+        slot_job[s] = slot_job[num_slots];
+        step[s] = step[num_slots];
+        v[s] = v[num_slots];
+      }
+    }
+  }
+}
+
 }  // namespace
 
 void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQuery* rays, int n) {
@@ -275,17 +348,35 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
       }
     }
   }
+  // The bracketed crossings (RefineCrossing).
+  Refinement jobs[kRayBatch];
+  int job_ray[kRayBatch], num_jobs = 0;
   for (int r = 0; r < n; ++r) {
     const March& a = m[r];
-    RayDistanceQuery& q = rays[r];
-    q.found = false;
+    rays[r].found = false;
     if (a.failed || same_side(a.sign, a.phi_hi)) continue;
-    double phi_c;
-    const double d = RefineCrossing(lookup, phi_z, q.o, a.direction, a.lo, a.hi, a.phi_lo, a.phi_hi, q.c, q.g_c,
-                                    &phi_c, &q.cell, &q.in_cell);
-    if (d > a.limit) continue;
+    Refinement& j = jobs[num_jobs];
+    j.origin = rays[r].o;
+    j.direction = a.direction;
+    j.lo = a.lo;
+    j.hi = a.hi;
+    j.v_lo = a.phi_lo;
+    j.v_hi = a.phi_hi;
+    job_ray[num_jobs++] = r;
+  }
+  RefineCrossings(lookup, pair, phi_z, jobs, num_jobs);
+  for (int k = 0; k < num_jobs; ++k) {
+    const Refinement& j = jobs[k];
+    RayDistanceQuery& q = rays[job_ray[k]];
+    for (int a = 0; a < 3; ++a) {
+      q.c[a] = j.c[a];
+      q.g_c[a] = j.g_c[a];
+    }
+    q.cell = j.cell;
+    q.in_cell = j.in_cell;
+    if (j.t > m[job_ray[k]].limit) continue;
     if (!(q.g_c[0] * q.u[0] + q.g_c[1] * q.u[1] + q.g_c[2] * q.u[2] < -kMinRaySlope)) continue;
-    q.distance = d;
+    q.distance = j.t;
     q.found = true;
   }
 }
@@ -353,14 +444,33 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
       }
     }
   }
+  // The bracketed crossings (RefineCrossing).
+  Refinement jobs[kRayBatch];
+  int job_ray[kRayBatch], num_jobs = 0;
   for (int r = 0; r < n; ++r) {
     const Trace& a = t[r];
-    FirstCrossingQuery& q = rays[r];
-    q.hit = a.bracketed;
-    if (!q.hit) continue;
-    double phi_c;
-    q.lambda = RefineCrossing(lookup, phi_z, o_cam, q.u, a.prev_l, a.last_l, a.prev_v, a.last_v, q.c, q.g_c, &phi_c,
-                              &q.cell, &q.in_cell);
+    rays[r].hit = a.bracketed;
+    if (!a.bracketed) continue;
+    Refinement& j = jobs[num_jobs];
+    j.origin = o_cam;
+    j.direction = rays[r].u;
+    j.lo = a.prev_l;
+    j.hi = a.last_l;
+    j.v_lo = a.prev_v;
+    j.v_hi = a.last_v;
+    job_ray[num_jobs++] = r;
+  }
+  RefineCrossings(lookup, pair, phi_z, jobs, num_jobs);
+  for (int k = 0; k < num_jobs; ++k) {
+    const Refinement& j = jobs[k];
+    FirstCrossingQuery& q = rays[job_ray[k]];
+    q.lambda = j.t;
+    for (int a = 0; a < 3; ++a) {
+      q.c[a] = j.c[a];
+      q.g_c[a] = j.g_c[a];
+    }
+    q.cell = j.cell;
+    q.in_cell = j.in_cell;
   }
 }
 
