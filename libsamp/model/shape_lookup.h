@@ -203,8 +203,9 @@ class ShapeLookup {
     }
 
     // When both points lie inside the grid box: their cells (LocateInside),
-    // values and d/dpoint (DenseAt(phi, cell, g)), bit for bit, and true.
-    // False otherwise (nothing written), and always without SSE2.
+    // values and d/dpoint (DenseAt(phi, cell, g); null g: the values only),
+    // bit for bit, and true. False otherwise (nothing written), and always
+    // without SSE2.
     bool EvaluateInside(const double* x, const double* y, const double* z, DenseCell* cells, double* values,
                         double (*g)[3]) const {
 #ifdef __SSE2__
@@ -243,22 +244,24 @@ class ShapeLookup {
       const __m128d c00 = along_x(0), c10 = along_x(1), c01 = along_x(2), c11 = along_x(3);
       const __m128d cy0 = _mm_add_pd(_mm_mul_pd(gy, c00), _mm_mul_pd(f[1], c10));
       const __m128d cy1 = _mm_add_pd(_mm_mul_pd(gy, c01), _mm_mul_pd(f[1], c11));
-      const __m128d d2 = _mm_mul_pd(_mm_sub_pd(cy1, cy0), inv_voxel_);
-      const __m128d d1 = _mm_mul_pd(
-          _mm_add_pd(_mm_mul_pd(gz, _mm_sub_pd(c10, c00)), _mm_mul_pd(f[2], _mm_sub_pd(c11, c01))), inv_voxel_);
-      auto dx = [&](int k) { return _mm_sub_pd(second[k], first[k]); };  // c[k + 1] - c[k]
-      const __m128d d0 = _mm_mul_pd(
-          _mm_add_pd(_mm_mul_pd(gz, _mm_add_pd(_mm_mul_pd(gy, dx(0)), _mm_mul_pd(f[1], dx(1)))),
-                     _mm_mul_pd(f[2], _mm_add_pd(_mm_mul_pd(gy, dx(2)), _mm_mul_pd(f[1], dx(3))))),
-          inv_voxel_);
+      if (g) {
+        const __m128d d2 = _mm_mul_pd(_mm_sub_pd(cy1, cy0), inv_voxel_);
+        const __m128d d1 = _mm_mul_pd(
+            _mm_add_pd(_mm_mul_pd(gz, _mm_sub_pd(c10, c00)), _mm_mul_pd(f[2], _mm_sub_pd(c11, c01))), inv_voxel_);
+        auto dx = [&](int k) { return _mm_sub_pd(second[k], first[k]); };  // c[k + 1] - c[k]
+        const __m128d d0 = _mm_mul_pd(
+            _mm_add_pd(_mm_mul_pd(gz, _mm_add_pd(_mm_mul_pd(gy, dx(0)), _mm_mul_pd(f[1], dx(1)))),
+                       _mm_mul_pd(f[2], _mm_add_pd(_mm_mul_pd(gy, dx(2)), _mm_mul_pd(f[1], dx(3))))),
+            inv_voxel_);
+        _mm_storel_pd(&g[0][0], d0);
+        _mm_storeh_pd(&g[1][0], d0);
+        _mm_storel_pd(&g[0][1], d1);
+        _mm_storeh_pd(&g[1][1], d1);
+        _mm_storel_pd(&g[0][2], d2);
+        _mm_storeh_pd(&g[1][2], d2);
+      }
       const __m128d v = _mm_add_pd(_mm_add_pd(_mm_mul_pd(gz, cy0), _mm_mul_pd(f[2], cy1)), _mm_setzero_pd());
       _mm_storeu_pd(values, v);
-      _mm_storel_pd(&g[0][0], d0);
-      _mm_storeh_pd(&g[1][0], d0);
-      _mm_storel_pd(&g[0][1], d1);
-      _mm_storeh_pd(&g[1][1], d1);
-      _mm_storel_pd(&g[0][2], d2);
-      _mm_storeh_pd(&g[1][2], d2);
       return true;
 #else
       (void)x, (void)y, (void)z, (void)cells, (void)values, (void)g;

@@ -200,6 +200,13 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
       ASSERT_FALSE(lanes);  // the scalar path is the caller's
 #endif
       if (!lanes) continue;
+      ShapeLookup::DenseCell value_cells[2];
+      double value_only[2];
+      ASSERT_TRUE(pair.EvaluateInside(x, y, z, value_cells, value_only, nullptr));  // the values only
+      for (int k = 0; k < 2; ++k) {
+        EXPECT_EQ(value_cells[k].base, cells[k].base);
+        EXPECT_EQ(bits(value_only[k]), bits(values[k]));
+      }
       for (int k = 0; k < 2; ++k) {
         const ShapeLookup::DenseCell& cell = k == 0 ? cell_i : cell_j;
         double g_ref[3];
