@@ -200,7 +200,7 @@ namespace {
 // next waiting ray so that the slots stay full until the queue runs dry.
 // Their points are kept per axis (slot s at x[s], y[s], z[s]) and evaluated
 // two at a time (ShapeLookup::DenseValuePair).
-constexpr int kMarchSlots = 4;
+constexpr int kMarchSlots = 8;
 
 // v[s] = phi at slot s's point, s in [0, num_slots).
 inline void SampleSlots(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair& pair, const double* phi_z,

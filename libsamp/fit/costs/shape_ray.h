@@ -48,7 +48,7 @@ bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double*
 // independent lookups overlap (a single ray's samples depend on each other),
 // their samples evaluated two at a time (ShapeLookup::DenseValuePair). Each
 // ray's result equals the single-ray function's.
-constexpr int kRayBatch = 32;
+constexpr int kRayBatch = 64;
 
 // RayDistance for each ray: in o, phi_o, u; out found, distance, c, g_c,
 // and c's cell when c lies inside the grid box (in_cell; d/dz at c by

@@ -144,7 +144,7 @@ TEST(ShapeRay, BatchedMarchesEqualTheSingleRayOnesBitForBit) {
   const auto surface = testing::SampleSurface(lookup, z, 200, &rng);
   auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof(a)) == 0; };
   int found = 0, hits = 0;
-  for (int trial = 0; trial < 40; ++trial) {
+  for (int trial = 0; trial < kRayBatch + 8; ++trial) {
     const int count = 1 + trial % kRayBatch;
     RayDistanceQuery near[kRayBatch];
     FirstCrossingQuery far[kRayBatch];
