@@ -54,18 +54,41 @@ Association AssociateByFit(const TrackFrame& f, const ShapeLookup& lookup, const
   const double* phi_z = lookup.DenseCached(z.data());
   a.points.reserve(f.candidate_points_in_world.size());
   a.sigmas.reserve(f.candidate_points_in_world.size());
+  auto keep_if_near = [&](size_t i, double phi) {
+    if (std::abs(phi) >= options.em_distance_threshold) {
+      ++too_far;
+      return;
+    }
+    a.points.push_back(f.candidate_points_in_world[i]);
+    a.sigmas.push_back(f.candidate_sigmas[i]);
+  };
+  // The candidates inside the box in order, their phi two at a time
+  // (DenseValuePair, the value of EvaluateDenseValue): the pending pair's
+  // indices and points (per axis).
+  const ShapeLookup::DenseValuePair pair(lookup, phi_z);
+  size_t pending[2];
+  double x[2], y[2], z_axis[2];
+  int num_pending = 0;
   for (size_t i = 0; i < f.candidate_points_in_world.size(); ++i) {
     const Eigen::Vector3d o = object_from_world * f.candidate_points_in_world[i];
     if ((o.array() < lo.array()).any() || (o.array() > hi.array()).any()) {
       ++outside_box;
       continue;
     }
-    if (std::abs(lookup.EvaluateDenseValue(phi_z, o.data())) >= options.em_distance_threshold) {
-      ++too_far;
-      continue;
-    }
-    a.points.push_back(f.candidate_points_in_world[i]);
-    a.sigmas.push_back(f.candidate_sigmas[i]);
+    pending[num_pending] = i;
+    x[num_pending] = o.x();
+    y[num_pending] = o.y();
+    z_axis[num_pending] = o.z();
+    if (++num_pending < 2) continue;
+    double phi[2];
+    pair.Evaluate(x, y, z_axis, phi);
+    keep_if_near(pending[0], phi[0]);
+    keep_if_near(pending[1], phi[1]);
+    num_pending = 0;
+  }
+  if (num_pending == 1) {
+    const double o[3] = {x[0], y[0], z_axis[0]};
+    keep_if_near(pending[0], lookup.EvaluateDenseValue(phi_z, o));
   }
   std::ostringstream s;
   s << a.points.size() << " of " << f.candidate_points_in_world.size() << " candidates kept; " << outside_box

@@ -16,11 +16,16 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "libsamp/core/grid_spec.h"
 #include "libsamp/core/mesh.h"
 #include "libsamp/model/shape_model.h"
+
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 namespace samp {
 
@@ -115,6 +120,163 @@ class ShapeLookup {
     if (!LocateInside(point, &cell)) return EvaluateDenseValueOutside(phi, point);
     return DenseAt(phi, cell, nullptr);
   }
+
+  // EvaluateDenseValue at two points at once, bit for bit: the ray marches'
+  // samples of two rays. With SSE2 one lane per point does
+  // EvaluateDenseValueOutside's operations in their order (the nearest box
+  // point, LocateInside's cell there, DenseAt's sums plus the distance to the
+  // box; inside the box the point itself plus 0, EvaluateDenseValue's value);
+  // a non-finite point and builds without SSE2 take EvaluateDenseValue. The
+  // lookup's constants are broadcast to both lanes once, when the pair is made
+  // (one per march). Holds references to the lookup and to phi, which must
+  // outlive it.
+  class DenseValuePair {
+   public:
+    DenseValuePair(const ShapeLookup& lookup, const double* phi) : lookup_(lookup), phi_(phi) {
+#ifdef __SSE2__
+      const GridSpec& grid = lookup.grid_;
+      for (int a = 0; a < 3; ++a) {
+        lo_[a] = _mm_set1_pd(grid.origin[a]);
+        hi_[a] = _mm_set1_pd(lookup.max_corner_[a]);
+        last_cell_[a] = _mm_set1_pd(double(grid.dims[a] - 2));
+      }
+      inv_voxel_ = _mm_set1_pd(lookup.inv_voxel_);
+      nx_ = grid.dims.x();
+      nxy_ = nx_ * grid.dims.y();
+      nx_lanes_ = _mm_set1_pd(double(nx_));
+      nxy_lanes_ = _mm_set1_pd(double(nxy_));
+#endif
+    }
+
+    // values[k] = EvaluateDenseValue(phi, (x[k], y[k], z[k])) for k = 0, 1.
+    void Evaluate(const double* x, const double* y, const double* z, double* values) const {
+#ifdef __SSE2__
+      const __m128d p[3] = {_mm_loadu_pd(x), _mm_loadu_pd(y), _mm_loadu_pd(z)};
+      // The nearest box point q = min(max(p, lo), hi) (std::max and std::min
+      // with their operands' roles) and the squared distance to it, summed
+      // from 0 over the axes in order.
+      __m128d q[3], outside_sq = _mm_setzero_pd();
+      for (int a = 0; a < 3; ++a) {
+        q[a] = _mm_min_pd(hi_[a], _mm_max_pd(lo_[a], p[a]));
+        const __m128d outside = _mm_sub_pd(p[a], q[a]);
+        outside_sq = _mm_add_pd(outside_sq, _mm_mul_pd(outside, outside));
+      }
+      // Not finite (false for NaN): EvaluateDenseValue's NaN.
+      if (_mm_movemask_pd(_mm_cmple_pd(outside_sq, _mm_set1_pd(std::numeric_limits<double>::max()))) != 3) {
+        for (int k = 0; k < 2; ++k) {
+          const double point[3] = {x[k], y[k], z[k]};
+          values[k] = lookup_.EvaluateDenseValue(phi_, point);
+        }
+        return;
+      }
+      // LocateInside at q per lane: u = (q - lo) / voxel >= 0, the cell
+      // i = min(int(u), dims - 2) (as a double: exact), the fraction u - i.
+      __m128d f[3], i[3];
+      for (int a = 0; a < 3; ++a) {
+        const __m128d u = _mm_mul_pd(_mm_sub_pd(q[a], lo_[a]), inv_voxel_);
+        i[a] = _mm_min_pd(_mm_cvtepi32_pd(_mm_cvttpd_epi32(u)), last_cell_[a]);
+        f[a] = _mm_sub_pd(u, i[a]);
+      }
+      // The cells' first corners (integers far below 2^53: exact as doubles).
+      const __m128d base = _mm_add_pd(_mm_add_pd(i[0], _mm_mul_pd(nx_lanes_, i[1])), _mm_mul_pd(nxy_lanes_, i[2]));
+      const double* c0 = phi_ + int64_t(_mm_cvtsd_f64(base));
+      const double* c1 = phi_ + int64_t(_mm_cvtsd_f64(_mm_unpackhi_pd(base, base)));
+      // DenseAt's sums (lane 0 from c0's corners, lane 1 from c1's), plus the
+      // distance (sqrt(+0) = +0 inside, where x + 0 + 0 = x + 0).
+      const __m128d one = _mm_set1_pd(1.0);
+      const __m128d gx = _mm_sub_pd(one, f[0]), gy = _mm_sub_pd(one, f[1]), gz = _mm_sub_pd(one, f[2]);
+      auto along_x = [&](int64_t k) {  // gx c[k] + fx c[k + 1]
+        const __m128d a = _mm_loadu_pd(c0 + k), b = _mm_loadu_pd(c1 + k);
+        return _mm_add_pd(_mm_mul_pd(gx, _mm_unpacklo_pd(a, b)), _mm_mul_pd(f[0], _mm_unpackhi_pd(a, b)));
+      };
+      const __m128d c00 = along_x(0), c10 = along_x(nx_), c01 = along_x(nxy_), c11 = along_x(nxy_ + nx_);
+      const __m128d cy0 = _mm_add_pd(_mm_mul_pd(gy, c00), _mm_mul_pd(f[1], c10));
+      const __m128d cy1 = _mm_add_pd(_mm_mul_pd(gy, c01), _mm_mul_pd(f[1], c11));
+      const __m128d v = _mm_add_pd(_mm_add_pd(_mm_mul_pd(gz, cy0), _mm_mul_pd(f[2], cy1)), _mm_setzero_pd());
+      _mm_storeu_pd(values, _mm_add_pd(v, _mm_sqrt_pd(outside_sq)));
+#else
+      for (int k = 0; k < 2; ++k) {
+        const double point[3] = {x[k], y[k], z[k]};
+        values[k] = lookup_.EvaluateDenseValue(phi_, point);
+      }
+#endif
+    }
+
+    // When both points lie inside the grid box: their cells (LocateInside),
+    // values and d/dpoint (DenseAt(phi, cell, g); null g: the values only),
+    // bit for bit, and true. False otherwise (nothing written), and always
+    // without SSE2.
+    bool EvaluateInside(const double* x, const double* y, const double* z, DenseCell* cells, double* values,
+                        double (*g)[3]) const {
+#ifdef __SSE2__
+      const __m128d p[3] = {_mm_loadu_pd(x), _mm_loadu_pd(y), _mm_loadu_pd(z)};
+      // LocateInside's test in both lanes (false for NaN, as there).
+      __m128d inside = _mm_and_pd(_mm_cmpge_pd(p[0], lo_[0]), _mm_cmple_pd(p[0], hi_[0]));
+      for (int a = 1; a < 3; ++a) {
+        inside = _mm_and_pd(inside, _mm_and_pd(_mm_cmpge_pd(p[a], lo_[a]), _mm_cmple_pd(p[a], hi_[a])));
+      }
+      if (_mm_movemask_pd(inside) != 3) return false;
+      __m128d f[3], i[3];
+      for (int a = 0; a < 3; ++a) {
+        const __m128d u = _mm_mul_pd(_mm_sub_pd(p[a], lo_[a]), inv_voxel_);
+        i[a] = _mm_min_pd(_mm_cvtepi32_pd(_mm_cvttpd_epi32(u)), last_cell_[a]);
+        f[a] = _mm_sub_pd(u, i[a]);
+        _mm_storel_pd(&cells[0].f[a], f[a]);
+        _mm_storeh_pd(&cells[1].f[a], f[a]);
+      }
+      const __m128d base = _mm_add_pd(_mm_add_pd(i[0], _mm_mul_pd(nx_lanes_, i[1])), _mm_mul_pd(nxy_lanes_, i[2]));
+      cells[0].base = int64_t(_mm_cvtsd_f64(base));
+      cells[1].base = int64_t(_mm_cvtsd_f64(_mm_unpackhi_pd(base, base)));
+      const double* c0 = phi_ + cells[0].base;
+      const double* c1 = phi_ + cells[1].base;
+      // DenseAt's sums and differences, in both lanes.
+      const __m128d one = _mm_set1_pd(1.0);
+      const __m128d gx = _mm_sub_pd(one, f[0]), gy = _mm_sub_pd(one, f[1]), gz = _mm_sub_pd(one, f[2]);
+      // Row k's corners: first (c[k]) and second (c[k + 1]) in both lanes.
+      __m128d first[4], second[4];
+      const int64_t rows[4] = {0, nx_, nxy_, nxy_ + nx_};
+      for (int k = 0; k < 4; ++k) {
+        const __m128d a = _mm_loadu_pd(c0 + rows[k]), b = _mm_loadu_pd(c1 + rows[k]);
+        first[k] = _mm_unpacklo_pd(a, b);
+        second[k] = _mm_unpackhi_pd(a, b);
+      }
+      auto along_x = [&](int k) { return _mm_add_pd(_mm_mul_pd(gx, first[k]), _mm_mul_pd(f[0], second[k])); };
+      const __m128d c00 = along_x(0), c10 = along_x(1), c01 = along_x(2), c11 = along_x(3);
+      const __m128d cy0 = _mm_add_pd(_mm_mul_pd(gy, c00), _mm_mul_pd(f[1], c10));
+      const __m128d cy1 = _mm_add_pd(_mm_mul_pd(gy, c01), _mm_mul_pd(f[1], c11));
+      if (g) {
+        const __m128d d2 = _mm_mul_pd(_mm_sub_pd(cy1, cy0), inv_voxel_);
+        const __m128d d1 = _mm_mul_pd(
+            _mm_add_pd(_mm_mul_pd(gz, _mm_sub_pd(c10, c00)), _mm_mul_pd(f[2], _mm_sub_pd(c11, c01))), inv_voxel_);
+        auto dx = [&](int k) { return _mm_sub_pd(second[k], first[k]); };  // c[k + 1] - c[k]
+        const __m128d d0 = _mm_mul_pd(
+            _mm_add_pd(_mm_mul_pd(gz, _mm_add_pd(_mm_mul_pd(gy, dx(0)), _mm_mul_pd(f[1], dx(1)))),
+                       _mm_mul_pd(f[2], _mm_add_pd(_mm_mul_pd(gy, dx(2)), _mm_mul_pd(f[1], dx(3))))),
+            inv_voxel_);
+        _mm_storel_pd(&g[0][0], d0);
+        _mm_storeh_pd(&g[1][0], d0);
+        _mm_storel_pd(&g[0][1], d1);
+        _mm_storeh_pd(&g[1][1], d1);
+        _mm_storel_pd(&g[0][2], d2);
+        _mm_storeh_pd(&g[1][2], d2);
+      }
+      const __m128d v = _mm_add_pd(_mm_add_pd(_mm_mul_pd(gz, cy0), _mm_mul_pd(f[2], cy1)), _mm_setzero_pd());
+      _mm_storeu_pd(values, v);
+      return true;
+#else
+      (void)x, (void)y, (void)z, (void)cells, (void)values, (void)g;
+      return false;
+#endif
+    }
+
+   private:
+    const ShapeLookup& lookup_;
+    const double* phi_;
+#ifdef __SSE2__
+    __m128d lo_[3], hi_[3], last_cell_[3], inv_voxel_, nx_lanes_, nxy_lanes_;
+    int64_t nx_, nxy_;
+#endif
+  };
 
   // EvaluateDense(phi, point, nullptr, nullptr), bit for bit, without the
   // derivatives' bookkeeping: the value at the nearest box point plus the

@@ -149,6 +149,80 @@ TEST(ShapeLookup, DenseGridsSumEachVoxelInOrder) {
   }
 }
 
+// DenseValuePair (two points in SSE2 lanes) returns EvaluateDenseValue's bits
+// at each point: inside the grid box, on its faces and corners, at a sample,
+// outside it (also just outside) and at non-finite points, in either lane;
+// with both points inside, EvaluateInside returns LocateInside's cells and
+// DenseAt's values and gradients bit for bit (with SSE2).
+TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
+  const ShapeModel model = RandomModel(5, 11);
+  const ShapeLookup lookup(model);
+  Eigen::VectorXd code(5);
+  code << 0.3, -0.8, 1.1, 0.25, -1.7;
+  const double* dense = lookup.DenseCached(code.data());
+  std::vector<Eigen::Vector3d> points = RandomPoints(model.grid, 0.02, 300, 5);
+  for (const Eigen::Vector3d& p : RandomPoints(model.grid, 0.5, 100, 6)) points.push_back(p);
+  const Eigen::Vector3d lo = model.grid.MinCorner(), hi = model.grid.MaxCorner();
+  points.push_back(lo);
+  points.push_back(hi);
+  points.push_back(Eigen::Vector3d(hi.x(), lo.y(), hi.z()));
+  points.push_back(model.grid.Position(3, 2, 1));  // a sample: fractions 0
+  points.push_back(Eigen::Vector3d(std::nextafter(hi.x(), 1e9), 0.0, 0.0));
+  points.push_back(Eigen::Vector3d(std::nextafter(lo.x(), -1e9), 0.0, 0.0));
+  points.push_back(Eigen::Vector3d(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0));
+  points.push_back(Eigen::Vector3d(0.0, std::numeric_limits<double>::infinity(), 0.0));
+  auto bits = [](double v) {
+    uint64_t b;
+    std::memcpy(&b, &v, sizeof(b));
+    return b;
+  };
+  const ShapeLookup::DenseValuePair pair(lookup, dense);
+  int both_inside = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    for (size_t j : {i, (i + 1) % points.size(), (i + 7) % points.size()}) {
+      const double x[2] = {points[i].x(), points[j].x()}, y[2] = {points[i].y(), points[j].y()};
+      const double z[2] = {points[i].z(), points[j].z()};
+      double values[2];
+      pair.Evaluate(x, y, z, values);
+      EXPECT_EQ(bits(values[0]), bits(lookup.EvaluateDenseValue(dense, points[i].data()))) << i << " " << j;
+      EXPECT_EQ(bits(values[1]), bits(lookup.EvaluateDenseValue(dense, points[j].data()))) << i << " " << j;
+      // EvaluateInside: the cells, values and gradients of LocateInside and
+      // DenseAt when both points lie inside the box, else false.
+      ShapeLookup::DenseCell cells[2], cell_i, cell_j;
+      double g[2][3];
+      const bool inside =
+          lookup.LocateInside(points[i].data(), &cell_i) && lookup.LocateInside(points[j].data(), &cell_j);
+      both_inside += inside;
+      const bool lanes = pair.EvaluateInside(x, y, z, cells, values, g);
+#ifdef __SSE2__
+      ASSERT_EQ(lanes, inside) << i << " " << j;
+#else
+      ASSERT_FALSE(lanes);  // the scalar path is the caller's
+#endif
+      if (!lanes) continue;
+      ShapeLookup::DenseCell value_cells[2];
+      double value_only[2];
+      ASSERT_TRUE(pair.EvaluateInside(x, y, z, value_cells, value_only, nullptr));  // the values only
+      for (int k = 0; k < 2; ++k) {
+        EXPECT_EQ(value_cells[k].base, cells[k].base);
+        EXPECT_EQ(bits(value_only[k]), bits(values[k]));
+      }
+      for (int k = 0; k < 2; ++k) {
+        const ShapeLookup::DenseCell& cell = k == 0 ? cell_i : cell_j;
+        double g_ref[3];
+        const double value = lookup.DenseAt(dense, cell, g_ref);
+        EXPECT_EQ(cells[k].base, cell.base);
+        EXPECT_EQ(bits(values[k]), bits(value)) << i << " " << j;
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_EQ(bits(cells[k].f[a]), bits(cell.f[a])) << i << " " << j;
+          EXPECT_EQ(bits(g[k][a]), bits(g_ref[a])) << i << " " << j;
+        }
+      }
+    }
+  }
+  EXPECT_GT(both_inside, 300);
+}
+
 // Reference for InsideBox: every inside voxel and its crossings towards
 // outside neighbours along each axis (linear interpolation), all voxels scanned.
 AlignedBox InsideBoxByFullScan(const ShapeLookup& lookup, const Eigen::VectorXd& z) {

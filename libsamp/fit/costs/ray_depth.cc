@@ -53,14 +53,32 @@ bool RayDepthCost::EvaluateRows(const double* z, const double* pose, int begin, 
 
 bool RayDepthCost::StartBatch(const PoseFrame& at, const double* pose, Batch* batch) const {
   Batch& rays = *batch;
-  for (int b = 0; b < rays.count; ++b) {
-    const int i = rays.first + b;
-    PointInObject(i, pose, at.c, at.s, rays.o[b]);
-    // phi at the point first; its derivatives there only when the residual
-    // stays phi (no crossing along the ray): most rows take them at the crossing.
+  // phi at the points first; its derivatives there only when the residual
+  // stays phi (no crossing along the ray): most rows take them at the crossing.
+  // Two points at a time when both lie inside the grid box
+  // (DenseValuePair::EvaluateInside: their cells and phi, bit for bit).
+  for (int b = 0; b < rays.count; ++b) PointInObject(rays.first + b, pose, at.c, at.s, rays.o[b]);
+  auto phi_at = [&](int b) {
     rays.o_in_cell[b] = lookup_->LocateInside(rays.o[b], &rays.o_cell[b]);
     rays.phi[b] = rays.o_in_cell[b] ? lookup_->DenseAt(at.phi_z, rays.o_cell[b], nullptr)
                                     : lookup_->EvaluateDense(at.phi_z, rays.o[b], nullptr, nullptr);
+  };
+  const ShapeLookup::DenseValuePair pair(*lookup_, at.phi_z);
+  int first_single = 0;
+  for (; first_single + 2 <= rays.count; first_single += 2) {
+    const int b = first_single;
+    const double x[2] = {rays.o[b][0], rays.o[b + 1][0]}, y[2] = {rays.o[b][1], rays.o[b + 1][1]};
+    const double z[2] = {rays.o[b][2], rays.o[b + 1][2]};
+    if (pair.EvaluateInside(x, y, z, &rays.o_cell[b], &rays.phi[b], nullptr)) {
+      rays.o_in_cell[b] = rays.o_in_cell[b + 1] = true;
+    } else {
+      phi_at(b);
+      phi_at(b + 1);
+    }
+  }
+  if (first_single < rays.count) phi_at(first_single);
+  for (int b = 0; b < rays.count; ++b) {
+    const int i = rays.first + b;
     if (!std::isfinite(rays.phi[b])) return false;
     RayInObject(i, at.c, at.s, rays.u[b]);
     if (rays.phi[b] == 0.0) continue;  // on the surface: phi and its derivatives at the point

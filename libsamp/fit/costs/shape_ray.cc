@@ -193,16 +193,112 @@ bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double*
   return finish_miss(ClosestApproach(lookup, phi_z, o_cam, u, a, b, ls[best], vs[best]));
 }
 
+namespace {
+
+// The march slots: kMarchSlots rays sample in lockstep, one sample each per
+// round (their lookups overlap), a ray that stops handing its slot to the
+// next waiting ray so that the slots stay full until the queue runs dry.
+// Their points are kept per axis (slot s at x[s], y[s], z[s]) and evaluated
+// two at a time (ShapeLookup::DenseValuePair).
+constexpr int kMarchSlots = 8;
+
+// v[s] = phi at slot s's point, s in [0, num_slots).
+inline void SampleSlots(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair& pair, const double* phi_z,
+                        const double* x, const double* y, const double* z, int num_slots, double* v) {
+  int s = 0;
+  for (; s + 2 <= num_slots; s += 2) pair.Evaluate(x + s, y + s, z + s, v + s);
+  if (s < num_slots) {
+    const double p[3] = {x[s], y[s], z[s]};
+    v[s] = lookup.EvaluateDenseValue(phi_z, p);
+  }
+}
+
+// RefineCrossing for several crossings: in origin, direction, the bracket
+// [lo, hi] and phi there; out t (RefineCrossing's return), c, g_c, cell and
+// in_cell. Each job's result equals RefineCrossing's bit for bit.
+struct Refinement {
+  const double* origin;
+  const double* direction;
+  double lo, hi, v_lo, v_hi;
+  double t, c[3], g_c[3];
+  ShapeLookup::DenseCell cell;
+  bool in_cell;
+};
+
+// RefineCrossing's Newton steps of the jobs in two lockstep slots, their
+// values and gradients two at a time when both points lie inside the grid
+// box (ShapeLookup::DenseValuePair::EvaluateInside), else one at a time.
+void RefineCrossings(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair& pair, const double* phi_z,
+                     Refinement* jobs, int n) {
+  const double tolerance = 1e-9 * lookup.grid().voxel_size;
+  int slot_job[2], step[2], num_slots = 0, next = 0;
+  auto start = [&](int s) {
+    Refinement& j = jobs[next];
+    j.t = j.lo + (j.hi - j.lo) * j.v_lo / (j.v_lo - j.v_hi);
+    slot_job[s] = next++;
+    step[s] = 0;
+  };
+  while (num_slots < 2 && next < n) start(num_slots++);
+  while (num_slots > 0) {
+    double x[2], y[2], z[2], v[2];
+    for (int s = 0; s < num_slots; ++s) {
+      Refinement& j = jobs[slot_job[s]];
+      PointOnRay(j.origin, j.direction, j.t, j.c);
+      x[s] = j.c[0];
+      y[s] = j.c[1];
+      z[s] = j.c[2];
+    }
+    ShapeLookup::DenseCell cells[2];
+    double g[2][3];
+    if (num_slots == 2 && pair.EvaluateInside(x, y, z, cells, v, g)) {
+      for (int s = 0; s < 2; ++s) {
+        Refinement& j = jobs[slot_job[s]];
+        j.cell = cells[s];
+        j.in_cell = true;
+        for (int a = 0; a < 3; ++a) j.g_c[a] = g[s][a];
+      }
+    } else {
+      for (int s = 0; s < num_slots; ++s) {
+        Refinement& j = jobs[slot_job[s]];
+        v[s] = ValueAndGradient(lookup, phi_z, j.c, j.g_c, &j.cell, &j.in_cell);
+      }
+    }
+    for (int s = 0; s < num_slots;) {
+      Refinement& j = jobs[slot_job[s]];
+      const double* d = j.direction;
+      const double slope = j.g_c[0] * d[0] + j.g_c[1] * d[1] + j.g_c[2] * d[2];
+      if (!(step[s] == kNewtonSteps || std::abs(v[s]) <= tolerance || slope == 0.0 || !std::isfinite(slope))) {
+        j.t = std::min(std::max(j.t - v[s] / slope, j.lo), j.hi);
+        ++step[s];
+        ++s;
+        continue;
+      }
+      // Done: the next job takes the slot, else the last slot's job.
+      if (next < n) {
+        start(s);
+        ++s;
+      } else if (--num_slots > s) {
+        slot_job[s] = slot_job[num_slots];
+        step[s] = step[num_slots];
+        v[s] = v[num_slots];
+      }
+    }
+  }
+}
+
+}  // namespace
+
 void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQuery* rays, int n) {
   SAMP_CHECK(n >= 0 && n <= kRayBatch) << "RayDistances: " << n << " rays, at most " << kRayBatch;
   const double min_step = 0.5 * lookup.grid().voxel_size;
   struct March {
     double sign, direction[3], lo, phi_lo, hi, phi_hi, limit;
     int steps;
-    bool active, failed;
+    bool failed;
   } m[kRayBatch];
   auto same_side = [](double sign, double v) { return sign < 0.0 ? v < 0.0 : v > 0.0; };
-  int active = 0;
+  // The rays that take a step, in order.
+  int queue[kRayBatch], queued = 0;
   for (int r = 0; r < n; ++r) {
     March& a = m[r];
     RayDistanceQuery& q = rays[r];
@@ -213,42 +309,74 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
     a.limit = kMaxRayRatio * std::abs(q.phi_o);
     a.steps = 0;
     a.failed = false;
-    a.active = same_side(a.sign, a.phi_hi) && a.hi <= a.limit;
-    active += a.active;
+    if (same_side(a.sign, a.phi_hi) && a.hi <= a.limit) queue[queued++] = r;
   }
-  // Sphere tracing, one step of every active ray per round (RayDistance's loop).
-  while (active > 0) {
-    active = 0;
-    for (int r = 0; r < n; ++r) {
-      March& a = m[r];
-      if (!a.active) continue;
+  // Sphere tracing (RayDistance's loop) in the march slots.
+  int slot_ray[kMarchSlots], num_slots = 0, next = 0;
+  double x[kMarchSlots], y[kMarchSlots], z[kMarchSlots], v[kMarchSlots];
+  while (num_slots < kMarchSlots && next < queued) slot_ray[num_slots++] = queue[next++];
+  const ShapeLookup::DenseValuePair pair(lookup, phi_z);
+  while (num_slots > 0) {
+    for (int s = 0; s < num_slots; ++s) {
+      March& a = m[slot_ray[s]];
+      const double* o = rays[slot_ray[s]].o;
       a.lo = a.hi;
       a.phi_lo = a.phi_hi;
       a.hi = a.lo + std::max(std::abs(a.phi_lo), min_step);
-      double p[3];
-      PointOnRay(rays[r].o, a.direction, a.hi, p);
-      a.phi_hi = lookup.EvaluateDenseValue(phi_z, p);
+      x[s] = o[0] + a.hi * a.direction[0];
+      y[s] = o[1] + a.hi * a.direction[1];
+      z[s] = o[2] + a.hi * a.direction[2];
+    }
+    SampleSlots(lookup, pair, phi_z, x, y, z, num_slots, v);
+    for (int s = 0; s < num_slots;) {
+      March& a = m[slot_ray[s]];
+      a.phi_hi = v[s];
       ++a.steps;
       if (!std::isfinite(a.phi_hi)) {
         a.failed = true;
-        a.active = false;
+      } else if (a.steps < kMaxMarchSteps && same_side(a.sign, a.phi_hi) && a.hi <= a.limit) {
+        ++s;
         continue;
       }
-      a.active = a.steps < kMaxMarchSteps && same_side(a.sign, a.phi_hi) && a.hi <= a.limit;
-      active += a.active;
+      // The ray stops: the next waiting ray takes its slot, else the last slot's ray.
+      if (next < queued) {
+        slot_ray[s] = queue[next++];
+        ++s;  // its first step comes in the next round
+      } else {
+        slot_ray[s] = slot_ray[--num_slots];
+        v[s] = v[num_slots];
+      }
     }
   }
+  // The bracketed crossings (RefineCrossing).
+  Refinement jobs[kRayBatch];
+  int job_ray[kRayBatch], num_jobs = 0;
   for (int r = 0; r < n; ++r) {
     const March& a = m[r];
-    RayDistanceQuery& q = rays[r];
-    q.found = false;
+    rays[r].found = false;
     if (a.failed || same_side(a.sign, a.phi_hi)) continue;
-    double v;
-    const double d = RefineCrossing(lookup, phi_z, q.o, a.direction, a.lo, a.hi, a.phi_lo, a.phi_hi, q.c, q.g_c, &v,
-                                    &q.cell, &q.in_cell);
-    if (d > a.limit) continue;
+    Refinement& j = jobs[num_jobs];
+    j.origin = rays[r].o;
+    j.direction = a.direction;
+    j.lo = a.lo;
+    j.hi = a.hi;
+    j.v_lo = a.phi_lo;
+    j.v_hi = a.phi_hi;
+    job_ray[num_jobs++] = r;
+  }
+  RefineCrossings(lookup, pair, phi_z, jobs, num_jobs);
+  for (int k = 0; k < num_jobs; ++k) {
+    const Refinement& j = jobs[k];
+    RayDistanceQuery& q = rays[job_ray[k]];
+    for (int a = 0; a < 3; ++a) {
+      q.c[a] = j.c[a];
+      q.g_c[a] = j.g_c[a];
+    }
+    q.cell = j.cell;
+    q.in_cell = j.in_cell;
+    if (j.t > m[job_ray[k]].limit) continue;
     if (!(q.g_c[0] * q.u[0] + q.g_c[1] * q.u[1] + q.g_c[2] * q.u[2] < -kMinRaySlope)) continue;
-    q.distance = d;
+    q.distance = j.t;
     q.found = true;
   }
 }
@@ -260,9 +388,10 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
   struct Trace {
     double l, leave, last_l, last_v, prev_l, prev_v;
     int count;
-    bool active, bracketed;
+    bool bracketed;
   } t[kRayBatch];
-  int active = 0;
+  // The rays that enter the grid box, in order.
+  int queue[kRayBatch], queued = 0;
   for (int r = 0; r < n; ++r) {
     Trace& a = t[r];
     a.count = 0;
@@ -270,44 +399,78 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
     a.last_l = a.last_v = a.prev_l = a.prev_v = 0.0;
     // A ray passing the grid box misses (FirstCrossing's closest approach is
     // not needed without refine_miss).
-    a.active = GridBoxSpan(lookup.grid(), o_cam, rays[r].u, &a.l, &a.leave);
-    active += a.active;
+    if (GridBoxSpan(lookup.grid(), o_cam, rays[r].u, &a.l, &a.leave)) queue[queued++] = r;
   }
-  // Sphere tracing from the box entry, one sample of every active ray per
-  // round (FirstCrossing's loop, stopping after the first sample beyond max_lambda).
-  while (active > 0) {
-    active = 0;
-    for (int r = 0; r < n; ++r) {
+  // Sphere tracing from the box entry (FirstCrossing's loop, stopping after
+  // the first sample beyond max_lambda) in the march slots.
+  int slot_ray[kMarchSlots], num_slots = 0, next = 0;
+  double x[kMarchSlots], y[kMarchSlots], z[kMarchSlots], v[kMarchSlots];
+  while (num_slots < kMarchSlots && next < queued) slot_ray[num_slots++] = queue[next++];
+  const ShapeLookup::DenseValuePair pair(lookup, phi_z);
+  while (num_slots > 0) {
+    for (int s = 0; s < num_slots; ++s) {
+      const double l = t[slot_ray[s]].l;
+      const double* u = rays[slot_ray[s]].u;
+      x[s] = o_cam[0] + l * u[0];
+      y[s] = o_cam[1] + l * u[1];
+      z[s] = o_cam[2] + l * u[2];
+    }
+    SampleSlots(lookup, pair, phi_z, x, y, z, num_slots, v);
+    for (int s = 0; s < num_slots;) {
+      const int r = slot_ray[s];
       Trace& a = t[r];
-      if (!a.active) continue;
-      double p[3];
-      PointOnRay(o_cam, rays[r].u, a.l, p);
-      const double v = lookup.EvaluateDenseValue(phi_z, p);
-      a.active = false;
-      if (!std::isfinite(v)) continue;
-      a.prev_l = a.last_l;
-      a.prev_v = a.last_v;
-      a.last_l = a.l;
-      a.last_v = v;
-      ++a.count;
-      if (v < 0.0) {
-        a.bracketed = a.count >= 2;  // inside at the box entry: a miss without refine_miss
-        continue;
+      const double value = v[s];
+      if (std::isfinite(value)) {
+        a.prev_l = a.last_l;
+        a.prev_v = a.last_v;
+        a.last_l = a.l;
+        a.last_v = value;
+        ++a.count;
+        if (value < 0.0) {
+          a.bracketed = a.count >= 2;  // inside at the box entry: a miss without refine_miss
+        } else if (!(a.l >= a.leave || a.count > kMaxTraceSteps || a.l > rays[r].max_lambda)) {
+          a.l = std::min(a.l + std::max(value, min_step), a.leave);
+          ++s;
+          continue;
+        }
       }
-      if (a.l >= a.leave || a.count > kMaxTraceSteps || a.l > rays[r].max_lambda) continue;
-      a.l = std::min(a.l + std::max(v, min_step), a.leave);
-      a.active = true;
-      ++active;
+      // The ray stops: the next waiting ray takes its slot, else the last slot's ray.
+      if (next < queued) {
+        slot_ray[s] = queue[next++];
+        ++s;  // its first sample comes in the next round
+      } else {
+        slot_ray[s] = slot_ray[--num_slots];
+        v[s] = v[num_slots];
+      }
     }
   }
+  // The bracketed crossings (RefineCrossing).
+  Refinement jobs[kRayBatch];
+  int job_ray[kRayBatch], num_jobs = 0;
   for (int r = 0; r < n; ++r) {
     const Trace& a = t[r];
-    FirstCrossingQuery& q = rays[r];
-    q.hit = a.bracketed;
-    if (!q.hit) continue;
-    double v;
-    q.lambda = RefineCrossing(lookup, phi_z, o_cam, q.u, a.prev_l, a.last_l, a.prev_v, a.last_v, q.c, q.g_c, &v,
-                              &q.cell, &q.in_cell);
+    rays[r].hit = a.bracketed;
+    if (!a.bracketed) continue;
+    Refinement& j = jobs[num_jobs];
+    j.origin = o_cam;
+    j.direction = rays[r].u;
+    j.lo = a.prev_l;
+    j.hi = a.last_l;
+    j.v_lo = a.prev_v;
+    j.v_hi = a.last_v;
+    job_ray[num_jobs++] = r;
+  }
+  RefineCrossings(lookup, pair, phi_z, jobs, num_jobs);
+  for (int k = 0; k < num_jobs; ++k) {
+    const Refinement& j = jobs[k];
+    FirstCrossingQuery& q = rays[job_ray[k]];
+    q.lambda = j.t;
+    for (int a = 0; a < 3; ++a) {
+      q.c[a] = j.c[a];
+      q.g_c[a] = j.g_c[a];
+    }
+    q.cell = j.cell;
+    q.in_cell = j.in_cell;
   }
 }
 

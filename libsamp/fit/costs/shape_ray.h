@@ -43,11 +43,12 @@ bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double*
                    double* lambda, double* c, double* g_c, double* phi_min, bool refine_miss = true,
                    double max_lambda = std::numeric_limits<double>::infinity());
 
-// Batched forms for the ray-depth term: up to kRayBatch rays marched in
-// lockstep, one sample of every ray per round, so that the rays' independent
-// lookups overlap (a single ray's samples depend on each other). Each ray's
-// result equals the single-ray function's.
-constexpr int kRayBatch = 8;
+// Batched forms for the ray-depth term: up to kRayBatch rays, marched a few
+// at a time in lockstep, one sample of each per round, so that the rays'
+// independent lookups overlap (a single ray's samples depend on each other),
+// their samples evaluated two at a time (ShapeLookup::DenseValuePair). Each
+// ray's result equals the single-ray function's.
+constexpr int kRayBatch = 64;
 
 // RayDistance for each ray: in o, phi_o, u; out found, distance, c, g_c,
 // and c's cell when c lies inside the grid box (in_cell; d/dz at c by

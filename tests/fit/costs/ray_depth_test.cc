@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -11,6 +13,7 @@
 #include "libsamp/core/error.h"
 #include "libsamp/core/pose.h"
 #include "libsamp/fit/costs/ray_depth.h"
+#include "libsamp/fit/costs/shape_ray.h"
 #include "tests/fit/cost_test_util.h"
 
 namespace samp {
@@ -124,6 +127,75 @@ TEST(RayDepthCost, ResidualsAndJacobians) {
   bad.term = DataTerm::kRayDepth;
   bad.camera_in_world = Eigen::Vector3d(4.0, 1.6, 15.0);
   EXPECT_THROW(RayDepthCost(&lookup, {Eigen::Vector3d(4.0, 1.6, 15.0)}, {0.1}, bad), Error);
+}
+
+// The batched marches (RayDistances, FirstCrossings: rays in lockstep slots,
+// samples two at a time) return each ray's single-ray result bit for bit:
+// rays from inside and outside the shape, towards it and away from it, from
+// outside the grid box, batches of every size up to kRayBatch.
+TEST(ShapeRay, BatchedMarchesEqualTheSingleRayOnesBitForBit) {
+  const ShapeLookup& lookup = Lookup();
+  const Eigen::VectorXd z = 0.5 * lookup.sigmas();
+  const double* phi_z = lookup.DenseCached(z.data());
+  std::mt19937 rng(21);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const Eigen::Vector3d lo = lookup.grid().MinCorner(), hi = lookup.grid().MaxCorner();
+  const Eigen::Vector3d centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+  const auto surface = testing::SampleSurface(lookup, z, 200, &rng);
+  auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof(a)) == 0; };
+  int found = 0, hits = 0;
+  for (int trial = 0; trial < kRayBatch + 8; ++trial) {
+    const int count = 1 + trial % kRayBatch;
+    RayDistanceQuery near[kRayBatch];
+    FirstCrossingQuery far[kRayBatch];
+    const Eigen::Vector3d camera = centre + Eigen::Vector3d(3.0 * n(rng), 0.5 * n(rng), 3.0 * n(rng)) +
+                                   Eigen::Vector3d(0.0, 0.0, 4.0);
+    for (int r = 0; r < count; ++r) {
+      // Points near the surface, off it along the ray (most), and points in
+      // and around the grid box (some outside it).
+      Eigen::Vector3d o;
+      if (r % 4 != 3) {
+        const Eigen::Vector3d& p = surface[size_t(trial * kRayBatch + r) % surface.size()];
+        o = p + 0.1 * n(rng) * (p - camera).normalized();
+      } else {
+        for (int a = 0; a < 3; ++a) o[a] = centre[a] + 1.2 * half[a] * std::tanh(n(rng));
+      }
+      const Eigen::Vector3d u = (o - camera).normalized();
+      for (int a = 0; a < 3; ++a) {
+        near[r].o[a] = o[a];
+        near[r].u[a] = far[r].u[a] = u[a];
+      }
+      near[r].phi_o = lookup.EvaluateDense(phi_z, near[r].o, nullptr, nullptr);
+      far[r].max_lambda = r % 3 == 0 ? std::numeric_limits<double>::infinity() : (o - camera).norm();
+    }
+    RayDistances(lookup, phi_z, near, count);
+    FirstCrossings(lookup, phi_z, camera.data(), far, count);
+    for (int r = 0; r < count; ++r) {
+      double distance = 0.0, c[3], g_c[3];
+      const bool near_found = RayDistance(lookup, phi_z, near[r].o, near[r].phi_o, near[r].u, &distance, c, g_c);
+      ASSERT_EQ(near[r].found, near_found) << trial << " " << r;
+      if (near_found) {
+        ++found;
+        EXPECT_TRUE(same(near[r].distance, distance)) << trial << " " << r;
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_TRUE(same(near[r].c[a], c[a]) && same(near[r].g_c[a], g_c[a])) << trial << " " << r;
+        }
+      }
+      double lambda = 0.0, phi_min = 0.0;
+      const bool far_hit = FirstCrossing(lookup, phi_z, camera.data(), far[r].u, &lambda, c, g_c, &phi_min,
+                                         /*refine_miss=*/false, far[r].max_lambda);
+      ASSERT_EQ(far[r].hit, far_hit) << trial << " " << r;
+      if (far_hit) {
+        ++hits;
+        EXPECT_TRUE(same(far[r].lambda, lambda)) << trial << " " << r;
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_TRUE(same(far[r].c[a], c[a]) && same(far[r].g_c[a], g_c[a])) << trial << " " << r;
+        }
+      }
+    }
+  }
+  EXPECT_GT(found, 50);
+  EXPECT_GT(hits, 50);
 }
 
 }  // namespace
