@@ -213,6 +213,20 @@ inline void SampleSlots(const ShapeLookup& lookup, const ShapeLookup::DenseValue
   }
 }
 
+// The ray in slot s stops: the next waiting ray of queue[*next..queued)
+// takes the slot (its first sample comes in the next round) and the next
+// slot to look at is s + 1; once the queue is dry the last slot's ray (and its
+// value v) moves into slot s, which is looked at again. Returns that slot.
+inline int HandOverSlot(int s, const int* queue, int queued, int* next, int* slot_ray, double* v, int* num_slots) {
+  if (*next < queued) {
+    slot_ray[s] = queue[(*next)++];
+    return s + 1;
+  }
+  slot_ray[s] = slot_ray[--*num_slots];
+  v[s] = v[*num_slots];
+  return s;
+}
+
 // RefineCrossing for several crossings: in origin, direction, the bracket
 // [lo, hi] and phi there; out t (RefineCrossing's return), c, g_c, cell and
 // in_cell. Each job's result equals RefineCrossing's bit for bit.
@@ -338,14 +352,7 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
         ++s;
         continue;
       }
-      // The ray stops: the next waiting ray takes its slot, else the last slot's ray.
-      if (next < queued) {
-        slot_ray[s] = queue[next++];
-        ++s;  // its first step comes in the next round
-      } else {
-        slot_ray[s] = slot_ray[--num_slots];
-        v[s] = v[num_slots];
-      }
+      s = HandOverSlot(s, queue, queued, &next, slot_ray, v, &num_slots);
     }
   }
   // The bracketed crossings (RefineCrossing).
@@ -434,14 +441,7 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
           continue;
         }
       }
-      // The ray stops: the next waiting ray takes its slot, else the last slot's ray.
-      if (next < queued) {
-        slot_ray[s] = queue[next++];
-        ++s;  // its first sample comes in the next round
-      } else {
-        slot_ray[s] = slot_ray[--num_slots];
-        v[s] = v[num_slots];
-      }
+      s = HandOverSlot(s, queue, queued, &next, slot_ray, v, &num_slots);
     }
   }
   // The bracketed crossings (RefineCrossing).
