@@ -36,21 +36,105 @@ inline double ValueAndGradient(const ShapeLookup& lookup, const double* phi_z, c
 
 // The crossing of origin + t direction bracketed in [lo, hi] (phi v_lo at lo
 // and v_hi at hi on either side of 0): a secant, then Newton steps kept
-// inside the bracket until |phi| is negligible. c, g_c and *v are those of
-// the returned t, and so are *cell and *in_cell (ValueAndGradient).
+// inside the bracket until |phi| is negligible. In: origin, direction, lo,
+// hi, v_lo, v_hi; out: t, and c, g_c, v (phi), cell and in_cell
+// (ValueAndGradient) at t.
+struct Refinement {
+  const double* origin;
+  const double* direction;
+  double lo, hi, v_lo, v_hi;
+  double t, c[3], g_c[3], v;
+  ShapeLookup::DenseCell cell;
+  bool in_cell;
+};
+
+// A job for the bracket [lo, hi] of origin + t direction, phi v_lo and v_hi there.
+Refinement Bracket(const double* origin, const double* direction, double lo, double hi, double v_lo, double v_hi) {
+  Refinement job;
+  job.origin = origin;
+  job.direction = direction;
+  job.lo = lo;
+  job.hi = hi;
+  job.v_lo = v_lo;
+  job.v_hi = v_hi;
+  return job;
+}
+
+// The crossings of n jobs, in two lockstep slots: their values and gradients
+// two at a time when both points lie inside the grid box
+// (ShapeLookup::DenseValuePair::EvaluateInside; pair non-null), else one at a
+// time. Each job's result is the same, bit for bit, either way.
+void RefineCrossings(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair* pair, const double* phi_z,
+                     Refinement* jobs, int n) {
+  const double tolerance = 1e-9 * lookup.grid().voxel_size;
+  int slot_job[2], step[2], num_slots = 0, next = 0;
+  auto start = [&](int s) {
+    Refinement& j = jobs[next];
+    j.t = j.lo + (j.hi - j.lo) * j.v_lo / (j.v_lo - j.v_hi);
+    slot_job[s] = next++;
+    step[s] = 0;
+  };
+  while (num_slots < 2 && next < n) start(num_slots++);
+  while (num_slots > 0) {
+    double x[2], y[2], z[2], v[2];
+    for (int s = 0; s < num_slots; ++s) {
+      Refinement& j = jobs[slot_job[s]];
+      PointOnRay(j.origin, j.direction, j.t, j.c);
+      x[s] = j.c[0];
+      y[s] = j.c[1];
+      z[s] = j.c[2];
+    }
+    ShapeLookup::DenseCell cells[2];
+    double g[2][3];
+    if (num_slots == 2 && pair != nullptr && pair->EvaluateInside(x, y, z, cells, v, g)) {
+      for (int s = 0; s < 2; ++s) {
+        Refinement& j = jobs[slot_job[s]];
+        j.cell = cells[s];
+        j.in_cell = true;
+        for (int a = 0; a < 3; ++a) j.g_c[a] = g[s][a];
+      }
+    } else {
+      for (int s = 0; s < num_slots; ++s) {
+        Refinement& j = jobs[slot_job[s]];
+        v[s] = ValueAndGradient(lookup, phi_z, j.c, j.g_c, &j.cell, &j.in_cell);
+      }
+    }
+    for (int s = 0; s < num_slots;) {
+      Refinement& j = jobs[slot_job[s]];
+      const double* d = j.direction;
+      const double slope = j.g_c[0] * d[0] + j.g_c[1] * d[1] + j.g_c[2] * d[2];
+      if (!(step[s] == kNewtonSteps || std::abs(v[s]) <= tolerance || slope == 0.0 || !std::isfinite(slope))) {
+        j.t = std::min(std::max(j.t - v[s] / slope, j.lo), j.hi);
+        ++step[s];
+        ++s;
+        continue;
+      }
+      // Done: the next job takes the slot, else the last slot's job.
+      j.v = v[s];
+      if (next < n) {
+        start(s);
+        ++s;
+      } else if (--num_slots > s) {
+        slot_job[s] = slot_job[num_slots];
+        step[s] = step[num_slots];
+        v[s] = v[num_slots];
+      }
+    }
+  }
+}
+
+// One crossing (RefineCrossings with a single job).
 double RefineCrossing(const ShapeLookup& lookup, const double* phi_z, const double* origin,
                       const double* direction, double lo, double hi, double v_lo, double v_hi, double* c,
-                      double* g_c, double* v, ShapeLookup::DenseCell* cell, bool* in_cell) {
-  double t = lo + (hi - lo) * v_lo / (v_lo - v_hi);
-  const double tolerance = 1e-9 * lookup.grid().voxel_size;
-  for (int k = 0;; ++k) {
-    PointOnRay(origin, direction, t, c);
-    *v = ValueAndGradient(lookup, phi_z, c, g_c, cell, in_cell);
-    const double slope = g_c[0] * direction[0] + g_c[1] * direction[1] + g_c[2] * direction[2];
-    if (k == kNewtonSteps || std::abs(*v) <= tolerance || slope == 0.0 || !std::isfinite(slope)) break;
-    t = std::min(std::max(t - *v / slope, lo), hi);
+                      double* g_c, double* v) {
+  Refinement job = Bracket(origin, direction, lo, hi, v_lo, v_hi);
+  RefineCrossings(lookup, nullptr, phi_z, &job, 1);
+  for (int a = 0; a < 3; ++a) {
+    c[a] = job.c[a];
+    g_c[a] = job.g_c[a];
   }
-  return t;
+  *v = job.v;
+  return job.t;
 }
 
 // The span [*enter, *leave] of o_cam + lambda u (lambda >= 0) inside the grid
@@ -126,9 +210,7 @@ bool RayDistance(const ShapeLookup& lookup, const double* phi_z, const double* o
   }
   if (same_side(phi_hi)) return false;
   double v;
-  ShapeLookup::DenseCell cell;
-  bool in_cell;
-  const double d = RefineCrossing(lookup, phi_z, o, direction, lo, hi, phi_lo, phi_hi, c, g_c, &v, &cell, &in_cell);
+  const double d = RefineCrossing(lookup, phi_z, o, direction, lo, hi, phi_lo, phi_hi, c, g_c, &v);
   if (d > limit) return false;
   // A crossing at a grazing angle (or none after all) counts as a miss.
   if (!(g_c[0] * u[0] + g_c[1] * u[1] + g_c[2] * u[2] < -kMinRaySlope)) return false;
@@ -176,10 +258,8 @@ bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double*
   }
   if (vs[count - 1] < 0.0 && count >= 2) {
     // Crossing bracketed in [ls[count-2], ls[count-1]].
-    ShapeLookup::DenseCell cell;
-    bool in_cell;
     *lambda = RefineCrossing(lookup, phi_z, o_cam, u, ls[count - 2], ls[count - 1], vs[count - 2], vs[count - 1],
-                             c, g_c, phi_min, &cell, &in_cell);
+                             c, g_c, phi_min);
     return true;
   }
   if (vs[count - 1] < 0.0) return finish_miss(ls[0]);  // inside at the box entry (a shape touching the box)
@@ -225,79 +305,6 @@ inline int HandOverSlot(int s, const int* queue, int queued, int* next, int* slo
   slot_ray[s] = slot_ray[--*num_slots];
   v[s] = v[*num_slots];
   return s;
-}
-
-// RefineCrossing for several crossings: in origin, direction, the bracket
-// [lo, hi] and phi there; out t (RefineCrossing's return), c, g_c, cell and
-// in_cell. Each job's result equals RefineCrossing's bit for bit.
-struct Refinement {
-  const double* origin;
-  const double* direction;
-  double lo, hi, v_lo, v_hi;
-  double t, c[3], g_c[3];
-  ShapeLookup::DenseCell cell;
-  bool in_cell;
-};
-
-// RefineCrossing's Newton steps of the jobs in two lockstep slots, their
-// values and gradients two at a time when both points lie inside the grid
-// box (ShapeLookup::DenseValuePair::EvaluateInside), else one at a time.
-void RefineCrossings(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair& pair, const double* phi_z,
-                     Refinement* jobs, int n) {
-  const double tolerance = 1e-9 * lookup.grid().voxel_size;
-  int slot_job[2], step[2], num_slots = 0, next = 0;
-  auto start = [&](int s) {
-    Refinement& j = jobs[next];
-    j.t = j.lo + (j.hi - j.lo) * j.v_lo / (j.v_lo - j.v_hi);
-    slot_job[s] = next++;
-    step[s] = 0;
-  };
-  while (num_slots < 2 && next < n) start(num_slots++);
-  while (num_slots > 0) {
-    double x[2], y[2], z[2], v[2];
-    for (int s = 0; s < num_slots; ++s) {
-      Refinement& j = jobs[slot_job[s]];
-      PointOnRay(j.origin, j.direction, j.t, j.c);
-      x[s] = j.c[0];
-      y[s] = j.c[1];
-      z[s] = j.c[2];
-    }
-    ShapeLookup::DenseCell cells[2];
-    double g[2][3];
-    if (num_slots == 2 && pair.EvaluateInside(x, y, z, cells, v, g)) {
-      for (int s = 0; s < 2; ++s) {
-        Refinement& j = jobs[slot_job[s]];
-        j.cell = cells[s];
-        j.in_cell = true;
-        for (int a = 0; a < 3; ++a) j.g_c[a] = g[s][a];
-      }
-    } else {
-      for (int s = 0; s < num_slots; ++s) {
-        Refinement& j = jobs[slot_job[s]];
-        v[s] = ValueAndGradient(lookup, phi_z, j.c, j.g_c, &j.cell, &j.in_cell);
-      }
-    }
-    for (int s = 0; s < num_slots;) {
-      Refinement& j = jobs[slot_job[s]];
-      const double* d = j.direction;
-      const double slope = j.g_c[0] * d[0] + j.g_c[1] * d[1] + j.g_c[2] * d[2];
-      if (!(step[s] == kNewtonSteps || std::abs(v[s]) <= tolerance || slope == 0.0 || !std::isfinite(slope))) {
-        j.t = std::min(std::max(j.t - v[s] / slope, j.lo), j.hi);
-        ++step[s];
-        ++s;
-        continue;
-      }
-      // Done: the next job takes the slot, else the last slot's job.
-      if (next < n) {
-        start(s);
-        ++s;
-      } else if (--num_slots > s) {
-        slot_job[s] = slot_job[num_slots];
-        step[s] = step[num_slots];
-        v[s] = v[num_slots];
-      }
-    }
-  }
 }
 
 }  // namespace
@@ -355,23 +362,17 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
       s = HandOverSlot(s, queue, queued, &next, slot_ray, v, &num_slots);
     }
   }
-  // The bracketed crossings (RefineCrossing).
+  // The bracketed crossings.
   Refinement jobs[kRayBatch];
   int job_ray[kRayBatch], num_jobs = 0;
   for (int r = 0; r < n; ++r) {
     const March& a = m[r];
     rays[r].found = false;
     if (a.failed || same_side(a.sign, a.phi_hi)) continue;
-    Refinement& j = jobs[num_jobs];
-    j.origin = rays[r].o;
-    j.direction = a.direction;
-    j.lo = a.lo;
-    j.hi = a.hi;
-    j.v_lo = a.phi_lo;
-    j.v_hi = a.phi_hi;
+    jobs[num_jobs] = Bracket(rays[r].o, a.direction, a.lo, a.hi, a.phi_lo, a.phi_hi);
     job_ray[num_jobs++] = r;
   }
-  RefineCrossings(lookup, pair, phi_z, jobs, num_jobs);
+  RefineCrossings(lookup, &pair, phi_z, jobs, num_jobs);
   for (int k = 0; k < num_jobs; ++k) {
     const Refinement& j = jobs[k];
     RayDistanceQuery& q = rays[job_ray[k]];
@@ -444,23 +445,17 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
       s = HandOverSlot(s, queue, queued, &next, slot_ray, v, &num_slots);
     }
   }
-  // The bracketed crossings (RefineCrossing).
+  // The bracketed crossings.
   Refinement jobs[kRayBatch];
   int job_ray[kRayBatch], num_jobs = 0;
   for (int r = 0; r < n; ++r) {
     const Trace& a = t[r];
     rays[r].hit = a.bracketed;
     if (!a.bracketed) continue;
-    Refinement& j = jobs[num_jobs];
-    j.origin = o_cam;
-    j.direction = rays[r].u;
-    j.lo = a.prev_l;
-    j.hi = a.last_l;
-    j.v_lo = a.prev_v;
-    j.v_hi = a.last_v;
+    jobs[num_jobs] = Bracket(o_cam, rays[r].u, a.prev_l, a.last_l, a.prev_v, a.last_v);
     job_ray[num_jobs++] = r;
   }
-  RefineCrossings(lookup, pair, phi_z, jobs, num_jobs);
+  RefineCrossings(lookup, &pair, phi_z, jobs, num_jobs);
   for (int k = 0; k < num_jobs; ++k) {
     const Refinement& j = jobs[k];
     FirstCrossingQuery& q = rays[job_ray[k]];
