@@ -200,19 +200,27 @@ template <typename Negative, typename Value>
 AlignedBox BoxFromSlices(const GridSpec& grid, const std::vector<uint8_t>* has, Negative negative, Value value) {
   const Eigen::Vector3i& n = grid.dims;
   const int64_t stride[3] = {1, int64_t(n.x()), int64_t(n.x()) * n.y()};
-  AlignedBox box;
+  // The first and last slice holding an inside voxel along each axis: the
+  // scans below skip the rows outside them (no inside voxel there).
+  int first[3], last[3];
   for (int a = 0; a < 3; ++a) {
     int lo = 0, hi = n[a] - 1;
     while (lo < n[a] && !has[a][size_t(lo)]) ++lo;
     if (lo == n[a]) return AlignedBox();  // phi_z >= 0 everywhere
     while (!has[a][size_t(hi)]) --hi;
+    first[a] = lo;
+    last[a] = hi;
+  }
+  AlignedBox box;
+  for (int a = 0; a < 3; ++a) {
+    const int lo = first[a], hi = last[a];
     const int b = (a + 1) % 3, c = (a + 2) % 3;
     auto scan = [&](int slice, int side, double* extreme) {
       if (slice < 0 || slice >= n[a]) return;
       const double position = grid.origin[a] + grid.voxel_size * double(slice);
       const bool has_neighbour = slice + side >= 0 && slice + side < n[a];
-      for (int q = 0; q < n[c]; ++q) {
-        for (int p = 0; p < n[b]; ++p) {
+      for (int q = first[c]; q <= last[c]; ++q) {
+        for (int p = first[b]; p <= last[b]; ++p) {
           const int64_t index = slice * stride[a] + p * stride[b] + q * stride[c];
           if (!negative(index)) continue;
           double x = position;
@@ -402,7 +410,7 @@ double ShapeLookup::EvaluateDenseValueOutside(const double* phi, const double* p
   }
   if (!std::isfinite(outside_sq)) return std::numeric_limits<double>::quiet_NaN();
   const double distance = outside_sq > 0.0 ? std::sqrt(outside_sq) : 0.0;
-  DenseCell cell;
+  DenseCell cell{};  // set by LocateInside: q lies in the box
   LocateInside(q, &cell);
   return DenseAt(phi, cell, nullptr) + distance;
 }
@@ -481,7 +489,11 @@ bool ShapeLookup::LineariseInsideBoxSize(const Eigen::VectorXd& z, double step,
   negative.resize(d);
   // The buffer through a local pointer: the loops then skip the thread-local lookup.
   uint8_t* const is_negative = negative.data();
-  for (size_t v = 0; v < d; ++v) is_negative[v] = float(base[v]) < 0.0f;
+  // float(x) < 0 exactly when x < -2^-150 (nearer -2^-149, the smallest
+  // float below zero, than -0; the tie rounds to even, -0): the same test
+  // without a conversion per voxel.
+  constexpr double kLargestToMinusZero = -0x1p-150;
+  for (size_t v = 0; v < d; ++v) is_negative[v] = base[v] < kLargestToMinusZero;
   std::vector<uint8_t> has[3], core_has[3];
   InsideSlices(grid_, is_negative, [](uint8_t v) { return v != 0; }, has);
   const AlignedBox box = BoxFromSlices(
