@@ -294,15 +294,19 @@ inline void SampleSlots(const ShapeLookup& lookup, const ShapeLookup::DenseValue
 }
 
 // The ray in slot s stops: the next waiting ray of queue[*next..queued)
-// takes the slot (its first sample comes in the next round) and the next
-// slot to look at is s + 1; once the queue is dry the last slot's ray (and its
-// value v) moves into slot s, which is looked at again. Returns that slot.
-inline int HandOverSlot(int s, const int* queue, int queued, int* next, int* slot_ray, double* v, int* num_slots) {
+// takes the slot (load(s, ray); its first sample comes in the next round)
+// and the next slot to look at is s + 1; once the queue is dry the last
+// slot's state (move(s, last)) and its value v move into slot s, which is
+// looked at again. Returns that slot.
+template <typename Load, typename Move>
+inline int HandOverSlot(int s, const int* queue, int queued, int* next, double* v, int* num_slots, Load load,
+                        Move move) {
   if (*next < queued) {
-    slot_ray[s] = queue[(*next)++];
+    load(s, queue[(*next)++]);
     return s + 1;
   }
-  slot_ray[s] = slot_ray[--*num_slots];
+  --*num_slots;
+  move(s, *num_slots);
   v[s] = v[*num_slots];
   return s;
 }
@@ -335,7 +339,9 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
   // Sphere tracing (RayDistance's loop) in the march slots.
   int slot_ray[kMarchSlots], num_slots = 0, next = 0;
   double x[kMarchSlots], y[kMarchSlots], z[kMarchSlots], v[kMarchSlots];
-  while (num_slots < kMarchSlots && next < queued) slot_ray[num_slots++] = queue[next++];
+  auto load = [&](int s, int r) { slot_ray[s] = r; };
+  auto move = [&](int to, int from) { slot_ray[to] = slot_ray[from]; };
+  while (num_slots < kMarchSlots && next < queued) load(num_slots++, queue[next++]);
   const ShapeLookup::DenseValuePair pair(lookup, phi_z);
   while (num_slots > 0) {
     for (int s = 0; s < num_slots; ++s) {
@@ -359,7 +365,7 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
         ++s;
         continue;
       }
-      s = HandOverSlot(s, queue, queued, &next, slot_ray, v, &num_slots);
+      s = HandOverSlot(s, queue, queued, &next, v, &num_slots, load, move);
     }
   }
   // The bracketed crossings.
@@ -393,56 +399,87 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
                     int n) {
   SAMP_CHECK(n >= 0 && n <= kRayBatch) << "FirstCrossings: " << n << " rays, at most " << kRayBatch;
   const double min_step = 0.5 * lookup.grid().voxel_size;
+  // Each ray's last two samples when its trace stopped, the last one negative
+  // after at least two samples: the bracket of its crossing.
   struct Trace {
-    double l, leave, last_l, last_v, prev_l, prev_v;
-    int count;
-    bool bracketed;
+    double last_l = 0.0, last_v = 0.0, prev_l = 0.0, prev_v = 0.0;
+    bool bracketed = false;
   } t[kRayBatch];
-  // The rays that enter the grid box, in order.
+  // The rays that enter the grid box, in order, with the span inside it.
   int queue[kRayBatch], queued = 0;
+  double enter[kRayBatch], leave[kRayBatch];
   for (int r = 0; r < n; ++r) {
-    Trace& a = t[r];
-    a.count = 0;
-    a.bracketed = false;
-    a.last_l = a.last_v = a.prev_l = a.prev_v = 0.0;
     // A ray passing the grid box misses (FirstCrossing's closest approach is
     // not needed without refine_miss).
-    if (GridBoxSpan(lookup.grid(), o_cam, rays[r].u, &a.l, &a.leave)) queue[queued++] = r;
+    if (GridBoxSpan(lookup.grid(), o_cam, rays[r].u, &enter[r], &leave[r])) queue[queued++] = r;
   }
   // Sphere tracing from the box entry (FirstCrossing's loop, stopping after
-  // the first sample beyond max_lambda) in the march slots.
-  int slot_ray[kMarchSlots], num_slots = 0, next = 0;
+  // the first sample beyond max_lambda) in the march slots, whose state is
+  // kept per slot (the ray in slot s: its next sample at l[s], its box exit,
+  // max_lambda and direction, its last two samples and their count).
+  struct Slots {
+    int ray[kMarchSlots], count[kMarchSlots];
+    double l[kMarchSlots], leave[kMarchSlots], max_lambda[kMarchSlots], u[3][kMarchSlots];
+    double last_l[kMarchSlots], last_v[kMarchSlots], prev_l[kMarchSlots], prev_v[kMarchSlots];
+  } slots;
+  int num_slots = 0, next = 0;
+  auto load = [&](int s, int r) {
+    slots.ray[s] = r;
+    slots.count[s] = 0;
+    slots.l[s] = enter[r];
+    slots.leave[s] = leave[r];
+    slots.max_lambda[s] = rays[r].max_lambda;
+    for (int a = 0; a < 3; ++a) slots.u[a][s] = rays[r].u[a];
+    slots.last_l[s] = slots.last_v[s] = slots.prev_l[s] = slots.prev_v[s] = 0.0;
+  };
+  auto move = [&](int to, int from) {
+    slots.ray[to] = slots.ray[from];
+    slots.count[to] = slots.count[from];
+    slots.l[to] = slots.l[from];
+    slots.leave[to] = slots.leave[from];
+    slots.max_lambda[to] = slots.max_lambda[from];
+    for (int a = 0; a < 3; ++a) slots.u[a][to] = slots.u[a][from];
+    slots.last_l[to] = slots.last_l[from];
+    slots.last_v[to] = slots.last_v[from];
+    slots.prev_l[to] = slots.prev_l[from];
+    slots.prev_v[to] = slots.prev_v[from];
+  };
   double x[kMarchSlots], y[kMarchSlots], z[kMarchSlots], v[kMarchSlots];
-  while (num_slots < kMarchSlots && next < queued) slot_ray[num_slots++] = queue[next++];
+  while (num_slots < kMarchSlots && next < queued) load(num_slots++, queue[next++]);
   const ShapeLookup::DenseValuePair pair(lookup, phi_z);
   while (num_slots > 0) {
     for (int s = 0; s < num_slots; ++s) {
-      const double l = t[slot_ray[s]].l;
-      const double* u = rays[slot_ray[s]].u;
-      x[s] = o_cam[0] + l * u[0];
-      y[s] = o_cam[1] + l * u[1];
-      z[s] = o_cam[2] + l * u[2];
+      x[s] = o_cam[0] + slots.l[s] * slots.u[0][s];
+      y[s] = o_cam[1] + slots.l[s] * slots.u[1][s];
+      z[s] = o_cam[2] + slots.l[s] * slots.u[2][s];
     }
     SampleSlots(lookup, pair, phi_z, x, y, z, num_slots, v);
     for (int s = 0; s < num_slots;) {
-      const int r = slot_ray[s];
-      Trace& a = t[r];
       const double value = v[s];
+      bool bracketed = false;
       if (std::isfinite(value)) {
-        a.prev_l = a.last_l;
-        a.prev_v = a.last_v;
-        a.last_l = a.l;
-        a.last_v = value;
-        ++a.count;
+        slots.prev_l[s] = slots.last_l[s];
+        slots.prev_v[s] = slots.last_v[s];
+        slots.last_l[s] = slots.l[s];
+        slots.last_v[s] = value;
+        ++slots.count[s];
         if (value < 0.0) {
-          a.bracketed = a.count >= 2;  // inside at the box entry: a miss without refine_miss
-        } else if (!(a.l >= a.leave || a.count > kMaxTraceSteps || a.l > rays[r].max_lambda)) {
-          a.l = std::min(a.l + std::max(value, min_step), a.leave);
+          bracketed = slots.count[s] >= 2;  // inside at the box entry: a miss without refine_miss
+        } else if (!(slots.l[s] >= slots.leave[s] || slots.count[s] > kMaxTraceSteps ||
+                     slots.l[s] > slots.max_lambda[s])) {
+          slots.l[s] = std::min(slots.l[s] + std::max(value, min_step), slots.leave[s]);
           ++s;
           continue;
         }
       }
-      s = HandOverSlot(s, queue, queued, &next, slot_ray, v, &num_slots);
+      // The trace stops: its result, then the slot's hand-over.
+      Trace& done = t[slots.ray[s]];
+      done.bracketed = bracketed;
+      done.last_l = slots.last_l[s];
+      done.last_v = slots.last_v[s];
+      done.prev_l = slots.prev_l[s];
+      done.prev_v = slots.prev_v[s];
+      s = HandOverSlot(s, queue, queued, &next, v, &num_slots, load, move);
     }
   }
   // The bracketed crossings.
