@@ -420,6 +420,72 @@ const bool kCpuHasAvx = [] {
 }();
 
 }  // namespace
+
+bool ShapeLookup::DenseValuePair::HasEvaluate4() { return kCpuHasAvx; }
+
+__attribute__((target("avx"))) void ShapeLookup::DenseValuePair::Evaluate4(const double* x, const double* y,
+                                                                          const double* z, double* values) const {
+  const GridSpec& grid = lookup_.grid_;
+  const __m256d p[3] = {_mm256_loadu_pd(x), _mm256_loadu_pd(y), _mm256_loadu_pd(z)};
+  // Evaluate's steps in four lanes: the nearest box point and the squared
+  // distance to it, summed from 0 over the axes in order.
+  __m256d lo[3], q[3], outside_sq = _mm256_setzero_pd();
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = _mm256_set1_pd(grid.origin[a]);
+    q[a] = _mm256_min_pd(_mm256_set1_pd(lookup_.max_corner_[a]), _mm256_max_pd(lo[a], p[a]));
+    const __m256d outside = _mm256_sub_pd(p[a], q[a]);
+    outside_sq = _mm256_add_pd(outside_sq, _mm256_mul_pd(outside, outside));
+  }
+  if (_mm256_movemask_pd(_mm256_cmp_pd(outside_sq, _mm256_set1_pd(std::numeric_limits<double>::max()), _CMP_LE_OQ)) !=
+      15) {
+    for (int k = 0; k < 4; ++k) {
+      const double point[3] = {x[k], y[k], z[k]};
+      values[k] = lookup_.EvaluateDenseValue(phi_, point);
+    }
+    return;
+  }
+  // The cells (LocateInside at q) and fractions.
+  const __m256d inv_voxel = _mm256_set1_pd(lookup_.inv_voxel_);
+  __m256d f[3], i[3];
+  for (int a = 0; a < 3; ++a) {
+    const __m256d u = _mm256_mul_pd(_mm256_sub_pd(q[a], lo[a]), inv_voxel);
+    i[a] = _mm256_min_pd(_mm256_cvtepi32_pd(_mm256_cvttpd_epi32(u)), _mm256_set1_pd(double(grid.dims[a] - 2)));
+    f[a] = _mm256_sub_pd(u, i[a]);
+  }
+  const __m256d base = _mm256_add_pd(_mm256_add_pd(i[0], _mm256_mul_pd(_mm256_set1_pd(double(nx_)), i[1])),
+                                     _mm256_mul_pd(_mm256_set1_pd(double(nxy_)), i[2]));
+  alignas(32) double first_corner[4];
+  _mm256_store_pd(first_corner, base);
+  const double* c[4];
+  for (int k = 0; k < 4; ++k) c[k] = phi_ + int64_t(first_corner[k]);
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d gx = _mm256_sub_pd(one, f[0]), gy = _mm256_sub_pd(one, f[1]), gz = _mm256_sub_pd(one, f[2]);
+  // gx c[k] + fx c[k + 1] per lane for the cells' four rows along x: lanes
+  // 0 and 2 from one pair of loads, lanes 1 and 3 from the other, then their
+  // first and second corners.
+  const int64_t rows[4] = {0, nx_, nxy_, nxy_ + nx_};
+  __m256d along_x[4];
+  for (int r = 0; r < 4; ++r) {
+    const int64_t k = rows[r];
+    const __m256d even = _mm256_set_m128d(_mm_loadu_pd(c[2] + k), _mm_loadu_pd(c[0] + k));
+    const __m256d odd = _mm256_set_m128d(_mm_loadu_pd(c[3] + k), _mm_loadu_pd(c[1] + k));
+    along_x[r] = _mm256_add_pd(_mm256_mul_pd(gx, _mm256_unpacklo_pd(even, odd)),
+                               _mm256_mul_pd(f[0], _mm256_unpackhi_pd(even, odd)));
+  }
+  const __m256d c00 = along_x[0], c10 = along_x[1], c01 = along_x[2], c11 = along_x[3];
+  const __m256d cy0 = _mm256_add_pd(_mm256_mul_pd(gy, c00), _mm256_mul_pd(f[1], c10));
+  const __m256d cy1 = _mm256_add_pd(_mm256_mul_pd(gy, c01), _mm256_mul_pd(f[1], c11));
+  const __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(gz, cy0), _mm256_mul_pd(f[2], cy1)), _mm256_setzero_pd());
+  _mm256_storeu_pd(values, _mm256_add_pd(v, _mm256_sqrt_pd(outside_sq)));
+}
+#else
+bool ShapeLookup::DenseValuePair::HasEvaluate4() { return false; }
+void ShapeLookup::DenseValuePair::Evaluate4(const double* x, const double* y, const double* z, double* values) const {
+  for (int k = 0; k < 4; ++k) {
+    const double point[3] = {x[k], y[k], z[k]};
+    values[k] = lookup_.EvaluateDenseValue(phi_, point);
+  }
+}
 #endif
 
 void ShapeLookup::CodeGradientAt(const DenseCell& cell, double* d_z) const {

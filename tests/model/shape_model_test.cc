@@ -221,6 +221,22 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
     }
   }
   EXPECT_GT(both_inside, 300);
+  // Evaluate4 (where the CPU has AVX): each of the four lanes is
+  // EvaluateDenseValue's value, whatever the other lanes hold.
+  if (!ShapeLookup::DenseValuePair::HasEvaluate4()) GTEST_SKIP() << "no AVX: Evaluate4 is not used";
+  for (size_t i = 0; i < points.size(); ++i) {
+    const size_t lanes[4] = {i, (i + 1) % points.size(), (i + 7) % points.size(), (i + 101) % points.size()};
+    double x[4], y[4], z[4], values[4];
+    for (int k = 0; k < 4; ++k) {
+      x[k] = points[lanes[k]].x();
+      y[k] = points[lanes[k]].y();
+      z[k] = points[lanes[k]].z();
+    }
+    pair.Evaluate4(x, y, z, values);
+    for (int k = 0; k < 4; ++k) {
+      EXPECT_EQ(bits(values[k]), bits(lookup.EvaluateDenseValue(dense, points[lanes[k]].data()))) << i << " " << k;
+    }
+  }
 }
 
 // Reference for InsideBox: every inside voxel and its crossings towards

@@ -282,10 +282,15 @@ namespace {
 // two at a time (ShapeLookup::DenseValuePair).
 constexpr int kMarchSlots = 8;
 
-// v[s] = phi at slot s's point, s in [0, num_slots).
-inline void SampleSlots(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair& pair, const double* phi_z,
-                        const double* x, const double* y, const double* z, int num_slots, double* v) {
+// v[s] = phi at slot s's point, s in [0, num_slots): four at a time when
+// `four` (DenseValuePair::HasEvaluate4), then two, then one.
+inline void SampleSlots(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair& pair, bool four,
+                        const double* phi_z, const double* x, const double* y, const double* z, int num_slots,
+                        double* v) {
   int s = 0;
+  if (four) {
+    for (; s + 4 <= num_slots; s += 4) pair.Evaluate4(x + s, y + s, z + s, v + s);
+  }
   for (; s + 2 <= num_slots; s += 2) pair.Evaluate(x + s, y + s, z + s, v + s);
   if (s < num_slots) {
     const double p[3] = {x[s], y[s], z[s]};
@@ -343,6 +348,7 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
   auto move = [&](int to, int from) { slot_ray[to] = slot_ray[from]; };
   while (num_slots < kMarchSlots && next < queued) load(num_slots++, queue[next++]);
   const ShapeLookup::DenseValuePair pair(lookup, phi_z);
+  const bool four = ShapeLookup::DenseValuePair::HasEvaluate4();
   while (num_slots > 0) {
     for (int s = 0; s < num_slots; ++s) {
       March& a = m[slot_ray[s]];
@@ -354,7 +360,7 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
       y[s] = o[1] + a.hi * a.direction[1];
       z[s] = o[2] + a.hi * a.direction[2];
     }
-    SampleSlots(lookup, pair, phi_z, x, y, z, num_slots, v);
+    SampleSlots(lookup, pair, four, phi_z, x, y, z, num_slots, v);
     for (int s = 0; s < num_slots;) {
       March& a = m[slot_ray[s]];
       a.phi_hi = v[s];
@@ -447,13 +453,14 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
   double x[kMarchSlots], y[kMarchSlots], z[kMarchSlots], v[kMarchSlots];
   while (num_slots < kMarchSlots && next < queued) load(num_slots++, queue[next++]);
   const ShapeLookup::DenseValuePair pair(lookup, phi_z);
+  const bool four = ShapeLookup::DenseValuePair::HasEvaluate4();
   while (num_slots > 0) {
     for (int s = 0; s < num_slots; ++s) {
       x[s] = o_cam[0] + slots.l[s] * slots.u[0][s];
       y[s] = o_cam[1] + slots.l[s] * slots.u[1][s];
       z[s] = o_cam[2] + slots.l[s] * slots.u[2][s];
     }
-    SampleSlots(lookup, pair, phi_z, x, y, z, num_slots, v);
+    SampleSlots(lookup, pair, four, phi_z, x, y, z, num_slots, v);
     for (int s = 0; s < num_slots;) {
       const double value = v[s];
       bool bracketed = false;
