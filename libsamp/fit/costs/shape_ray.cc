@@ -24,6 +24,11 @@ void PointOnRay(const double* origin, const double* direction, double t, double*
   for (int a = 0; a < 3; ++a) p[a] = origin[a] + t * direction[a];
 }
 
+// Whether v lies on the side `sign` (+-1) of the surface: sign < 0 ? v < 0 :
+// v > 0, without a branch on the ray's side (the product by +-1 is exact;
+// false for 0 and NaN).
+inline bool SameSide(double sign, double v) { return sign * v > 0.0; }
+
 // lookup.EvaluateDense(phi_z, p, g, nullptr), bit for bit: the value and
 // gradient of the Newton steps, by the inlined cell lookup for points inside
 // the grid box (*in_cell true, *cell set) and the general path for the others.
@@ -148,10 +153,11 @@ bool GridBoxSpan(const GridSpec& grid, const double* o_cam, const double* u, dou
       if (o_cam[a] < lo[a] || o_cam[a] > hi[a]) *enter = *leave + 1.0;
       continue;
     }
-    double t0 = (lo[a] - o_cam[a]) / u[a], t1 = (hi[a] - o_cam[a]) / u[a];
-    if (t0 > t1) std::swap(t0, t1);
-    *enter = std::max(*enter, t0);
-    *leave = std::min(*leave, t1);
+    const double t0 = (lo[a] - o_cam[a]) / u[a], t1 = (hi[a] - o_cam[a]) / u[a];
+    // The two in order (swapped when t0 > t1), without a branch.
+    const double near = t0 > t1 ? t1 : t0, far = t0 > t1 ? t0 : t1;
+    *enter = std::max(*enter, near);
+    *leave = std::min(*leave, far);
   }
   return *enter <= *leave;
 }
@@ -196,7 +202,7 @@ bool RayDistance(const ShapeLookup& lookup, const double* phi_z, const double* o
   const double min_step = 0.5 * lookup.grid().voxel_size;
   const double sign = phi_o < 0.0 ? -1.0 : 1.0;  // inside: towards the camera
   const double direction[3] = {sign * u[0], sign * u[1], sign * u[2]};
-  auto same_side = [&](double v) { return sign < 0.0 ? v < 0.0 : v > 0.0; };
+  auto same_side = [&](double v) { return SameSide(sign, v); };
   // Sphere tracing: |phi| bounds the distance to the surface.
   double lo = 0.0, phi_lo = phi_o, hi = 0.0, phi_hi = phi_o;
   const double limit = kMaxRayRatio * std::abs(phi_o);
@@ -326,7 +332,6 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
     int steps;
     bool failed;
   } m[kRayBatch];
-  auto same_side = [](double sign, double v) { return sign < 0.0 ? v < 0.0 : v > 0.0; };
   // The rays that take a step, in order.
   int queue[kRayBatch], queued = 0;
   for (int r = 0; r < n; ++r) {
@@ -339,7 +344,8 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
     a.limit = kMaxRayRatio * std::abs(q.phi_o);
     a.steps = 0;
     a.failed = false;
-    if (same_side(a.sign, a.phi_hi) && a.hi <= a.limit) queue[queued++] = r;
+    queue[queued] = r;
+    queued += SameSide(a.sign, a.phi_hi) & (a.hi <= a.limit);
   }
   // Sphere tracing (RayDistance's loop) in the march slots.
   int slot_ray[kMarchSlots], num_slots = 0, next = 0;
@@ -363,14 +369,17 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
     SampleSlots(lookup, pair, four, phi_z, x, y, z, num_slots, v);
     for (int s = 0; s < num_slots;) {
       March& a = m[slot_ray[s]];
-      a.phi_hi = v[s];
+      const double value = v[s];
+      a.phi_hi = value;
       ++a.steps;
-      if (!std::isfinite(a.phi_hi)) {
-        a.failed = true;
-      } else if (a.steps < kMaxMarchSteps && same_side(a.sign, a.phi_hi) && a.hi <= a.limit) {
+      // One branch per sample (the tests joined by &, not &&): whether the
+      // ray goes on is what the predictor cannot know.
+      const bool finite = std::isfinite(value);
+      if (finite & (a.steps < kMaxMarchSteps) & SameSide(a.sign, value) & (a.hi <= a.limit)) {
         ++s;
         continue;
       }
+      a.failed = !finite;
       s = HandOverSlot(s, queue, queued, &next, v, &num_slots, load, move);
     }
   }
@@ -380,9 +389,10 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
   for (int r = 0; r < n; ++r) {
     const March& a = m[r];
     rays[r].found = false;
-    if (a.failed || same_side(a.sign, a.phi_hi)) continue;
+    // Written for every ray, kept (counted) for the bracketed ones.
     jobs[num_jobs] = Bracket(rays[r].o, a.direction, a.lo, a.hi, a.phi_lo, a.phi_hi);
-    job_ray[num_jobs++] = r;
+    job_ray[num_jobs] = r;
+    num_jobs += !(a.failed | SameSide(a.sign, a.phi_hi));
   }
   RefineCrossings(lookup, &pair, phi_z, jobs, num_jobs);
   for (int k = 0; k < num_jobs; ++k) {
@@ -394,10 +404,8 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
     }
     q.cell = j.cell;
     q.in_cell = j.in_cell;
-    if (j.t > m[job_ray[k]].limit) continue;
-    if (!(q.g_c[0] * q.u[0] + q.g_c[1] * q.u[1] + q.g_c[2] * q.u[2] < -kMinRaySlope)) continue;
     q.distance = j.t;
-    q.found = true;
+    q.found = !(j.t > m[job_ray[k]].limit) & (q.g_c[0] * q.u[0] + q.g_c[1] * q.u[1] + q.g_c[2] * q.u[2] < -kMinRaySlope);
   }
 }
 
@@ -463,22 +471,23 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
     SampleSlots(lookup, pair, four, phi_z, x, y, z, num_slots, v);
     for (int s = 0; s < num_slots;) {
       const double value = v[s];
-      bool bracketed = false;
-      if (std::isfinite(value)) {
-        slots.prev_l[s] = slots.last_l[s];
-        slots.prev_v[s] = slots.last_v[s];
-        slots.last_l[s] = slots.l[s];
-        slots.last_v[s] = value;
-        ++slots.count[s];
-        if (value < 0.0) {
-          bracketed = slots.count[s] >= 2;  // inside at the box entry: a miss without refine_miss
-        } else if (!(slots.l[s] >= slots.leave[s] || slots.count[s] > kMaxTraceSteps ||
-                     slots.l[s] > slots.max_lambda[s])) {
-          slots.l[s] = std::min(slots.l[s] + std::max(value, min_step), slots.leave[s]);
-          ++s;
-          continue;
-        }
+      // The last two samples (read only from a bracketed trace, whose
+      // samples are all finite).
+      slots.prev_l[s] = slots.last_l[s];
+      slots.prev_v[s] = slots.last_v[s];
+      slots.last_l[s] = slots.l[s];
+      slots.last_v[s] = value;
+      ++slots.count[s];
+      // One branch per sample (the tests joined by &, not &&).
+      const bool finite = std::isfinite(value);
+      if (finite & !(value < 0.0) & !(slots.l[s] >= slots.leave[s]) & !(slots.count[s] > kMaxTraceSteps) &
+          !(slots.l[s] > slots.max_lambda[s])) {
+        slots.l[s] = std::min(slots.l[s] + std::max(value, min_step), slots.leave[s]);
+        ++s;
+        continue;
       }
+      // Inside at the box entry (one sample): a miss without refine_miss.
+      const bool bracketed = finite & (value < 0.0) & (slots.count[s] >= 2);
       // The trace stops: its result, then the slot's hand-over.
       Trace& done = t[slots.ray[s]];
       done.bracketed = bracketed;
@@ -495,9 +504,10 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
   for (int r = 0; r < n; ++r) {
     const Trace& a = t[r];
     rays[r].hit = a.bracketed;
-    if (!a.bracketed) continue;
+    // Written for every ray, kept (counted) for the bracketed ones.
     jobs[num_jobs] = Bracket(o_cam, rays[r].u, a.prev_l, a.last_l, a.prev_v, a.last_v);
-    job_ray[num_jobs++] = r;
+    job_ray[num_jobs] = r;
+    num_jobs += a.bracketed;
   }
   RefineCrossings(lookup, &pair, phi_z, jobs, num_jobs);
   for (int k = 0; k < num_jobs; ++k) {
