@@ -478,7 +478,85 @@ __attribute__((target("avx"))) void ShapeLookup::DenseValuePair::Evaluate4(const
   const __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(gz, cy0), _mm256_mul_pd(f[2], cy1)), _mm256_setzero_pd());
   _mm256_storeu_pd(values, _mm256_add_pd(v, _mm256_sqrt_pd(outside_sq)));
 }
+
+__attribute__((target("avx"))) bool ShapeLookup::DenseValuePair::EvaluateInside4(const double* x, const double* y,
+                                                                                const double* z, DenseCell* cells,
+                                                                                double* values,
+                                                                                double (*g)[3]) const {
+  const GridSpec& grid = lookup_.grid_;
+  const __m256d p[3] = {_mm256_loadu_pd(x), _mm256_loadu_pd(y), _mm256_loadu_pd(z)};
+  // EvaluateInside's steps in four lanes: LocateInside's test (false for NaN).
+  __m256d lo[3], inside = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = _mm256_set1_pd(grid.origin[a]);
+    const __m256d hi = _mm256_set1_pd(lookup_.max_corner_[a]);
+    inside = _mm256_and_pd(inside, _mm256_and_pd(_mm256_cmp_pd(p[a], lo[a], _CMP_GE_OQ),
+                                                 _mm256_cmp_pd(p[a], hi, _CMP_LE_OQ)));
+  }
+  if (_mm256_movemask_pd(inside) != 15) return false;
+  const __m256d inv_voxel = _mm256_set1_pd(lookup_.inv_voxel_);
+  alignas(32) double fractions[3][4];
+  __m256d f[3], i[3];
+  for (int a = 0; a < 3; ++a) {
+    const __m256d u = _mm256_mul_pd(_mm256_sub_pd(p[a], lo[a]), inv_voxel);
+    i[a] = _mm256_min_pd(_mm256_cvtepi32_pd(_mm256_cvttpd_epi32(u)), _mm256_set1_pd(double(grid.dims[a] - 2)));
+    f[a] = _mm256_sub_pd(u, i[a]);
+    _mm256_store_pd(fractions[a], f[a]);
+  }
+  const __m256d base = _mm256_add_pd(_mm256_add_pd(i[0], _mm256_mul_pd(_mm256_set1_pd(double(nx_)), i[1])),
+                                     _mm256_mul_pd(_mm256_set1_pd(double(nxy_)), i[2]));
+  alignas(32) double first_corner[4];
+  _mm256_store_pd(first_corner, base);
+  const double* c[4];
+  for (int k = 0; k < 4; ++k) {
+    cells[k].base = int64_t(first_corner[k]);
+    for (int a = 0; a < 3; ++a) cells[k].f[a] = fractions[a][k];
+    c[k] = phi_ + cells[k].base;
+  }
+  const __m256d one = _mm256_set1_pd(1.0);
+  const __m256d gx = _mm256_sub_pd(one, f[0]), gy = _mm256_sub_pd(one, f[1]), gz = _mm256_sub_pd(one, f[2]);
+  // Row r's corners, first (c[k]) and second (c[k + 1]), in the four lanes.
+  const int64_t rows[4] = {0, nx_, nxy_, nxy_ + nx_};
+  __m256d first[4], second[4], along_x[4];
+  for (int r = 0; r < 4; ++r) {
+    const int64_t k = rows[r];
+    const __m256d even = _mm256_set_m128d(_mm_loadu_pd(c[2] + k), _mm_loadu_pd(c[0] + k));
+    const __m256d odd = _mm256_set_m128d(_mm_loadu_pd(c[3] + k), _mm_loadu_pd(c[1] + k));
+    first[r] = _mm256_unpacklo_pd(even, odd);
+    second[r] = _mm256_unpackhi_pd(even, odd);
+    along_x[r] = _mm256_add_pd(_mm256_mul_pd(gx, first[r]), _mm256_mul_pd(f[0], second[r]));
+  }
+  const __m256d c00 = along_x[0], c10 = along_x[1], c01 = along_x[2], c11 = along_x[3];
+  const __m256d cy0 = _mm256_add_pd(_mm256_mul_pd(gy, c00), _mm256_mul_pd(f[1], c10));
+  const __m256d cy1 = _mm256_add_pd(_mm256_mul_pd(gy, c01), _mm256_mul_pd(f[1], c11));
+  if (g) {
+    const __m256d d2 = _mm256_mul_pd(_mm256_sub_pd(cy1, cy0), inv_voxel);
+    const __m256d d1 = _mm256_mul_pd(
+        _mm256_add_pd(_mm256_mul_pd(gz, _mm256_sub_pd(c10, c00)), _mm256_mul_pd(f[2], _mm256_sub_pd(c11, c01))),
+        inv_voxel);
+    __m256d dx[4];
+    for (int r = 0; r < 4; ++r) dx[r] = _mm256_sub_pd(second[r], first[r]);  // c[k + 1] - c[k]
+    const __m256d d0 = _mm256_mul_pd(
+        _mm256_add_pd(_mm256_mul_pd(gz, _mm256_add_pd(_mm256_mul_pd(gy, dx[0]), _mm256_mul_pd(f[1], dx[1]))),
+                      _mm256_mul_pd(f[2], _mm256_add_pd(_mm256_mul_pd(gy, dx[2]), _mm256_mul_pd(f[1], dx[3])))),
+        inv_voxel);
+    alignas(32) double d[3][4];
+    _mm256_store_pd(d[0], d0);
+    _mm256_store_pd(d[1], d1);
+    _mm256_store_pd(d[2], d2);
+    for (int k = 0; k < 4; ++k) {
+      for (int a = 0; a < 3; ++a) g[k][a] = d[a][k];
+    }
+  }
+  const __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(gz, cy0), _mm256_mul_pd(f[2], cy1)), _mm256_setzero_pd());
+  _mm256_storeu_pd(values, v);
+  return true;
+}
 #else
+bool ShapeLookup::DenseValuePair::EvaluateInside4(const double*, const double*, const double*, DenseCell*, double*,
+                                                  double (*)[3]) const {
+  return false;
+}
 bool ShapeLookup::DenseValuePair::HasEvaluate4() { return false; }
 void ShapeLookup::DenseValuePair::Evaluate4(const double* x, const double* y, const double* z, double* values) const {
   for (int k = 0; k < 4; ++k) {

@@ -221,9 +221,10 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
     }
   }
   EXPECT_GT(both_inside, 300);
-  // Evaluate4 (where the CPU has AVX): each of the four lanes is
-  // EvaluateDenseValue's value, whatever the other lanes hold.
+  // Evaluate4 and EvaluateInside4 (where the CPU has AVX): each of the four
+  // lanes is the one-point lookup's, whatever the other lanes hold.
   if (!ShapeLookup::DenseValuePair::HasEvaluate4()) GTEST_SKIP() << "no AVX: Evaluate4 is not used";
+  int four_inside = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     const size_t lanes[4] = {i, (i + 1) % points.size(), (i + 7) % points.size(), (i + 101) % points.size()};
     double x[4], y[4], z[4], values[4];
@@ -236,7 +237,27 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
     for (int k = 0; k < 4; ++k) {
       EXPECT_EQ(bits(values[k]), bits(lookup.EvaluateDenseValue(dense, points[lanes[k]].data()))) << i << " " << k;
     }
+    // EvaluateInside4: LocateInside's cells and DenseAt's values and
+    // gradients when all four lie inside the box, else false.
+    ShapeLookup::DenseCell cells[4], reference_cells[4];
+    double g[4][3];
+    bool all_inside = true;
+    for (int k = 0; k < 4; ++k) all_inside = lookup.LocateInside(points[lanes[k]].data(), &reference_cells[k]) && all_inside;
+    ASSERT_EQ(pair.EvaluateInside4(x, y, z, cells, values, g), all_inside) << i;
+    if (!all_inside) continue;
+    ++four_inside;
+    for (int k = 0; k < 4; ++k) {
+      double g_ref[3];
+      const double value = lookup.DenseAt(dense, reference_cells[k], g_ref);
+      EXPECT_EQ(cells[k].base, reference_cells[k].base) << i << " " << k;
+      EXPECT_EQ(bits(values[k]), bits(value)) << i << " " << k;
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_EQ(bits(cells[k].f[a]), bits(reference_cells[k].f[a])) << i << " " << k;
+        EXPECT_EQ(bits(g[k][a]), bits(g_ref[a])) << i << " " << k;
+      }
+    }
   }
+  EXPECT_GT(four_inside, 40);
 }
 
 // Reference for InsideBox: every inside voxel and its crossings towards

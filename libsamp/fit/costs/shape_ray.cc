@@ -65,23 +65,26 @@ Refinement Bracket(const double* origin, const double* direction, double lo, dou
   return job;
 }
 
-// The crossings of n jobs, in two lockstep slots: their values and gradients
-// two at a time when both points lie inside the grid box
-// (ShapeLookup::DenseValuePair::EvaluateInside; pair non-null), else one at a
-// time. Each job's result is the same, bit for bit, either way.
+// The crossings of n jobs, in four lockstep slots: their values and
+// gradients four at a time when all four points lie inside the grid box
+// (ShapeLookup::DenseValuePair::EvaluateInside4; pair non-null, the CPU with
+// AVX), else two at a time when both of a pair do (EvaluateInside), else one
+// at a time. Each job's result is the same, bit for bit, either way.
 void RefineCrossings(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair* pair, const double* phi_z,
                      Refinement* jobs, int n) {
+  constexpr int kSlots = 4;
   const double tolerance = 1e-9 * lookup.grid().voxel_size;
-  int slot_job[2], step[2], num_slots = 0, next = 0;
+  const bool four = pair != nullptr && ShapeLookup::DenseValuePair::HasEvaluate4();
+  int slot_job[kSlots], step[kSlots], num_slots = 0, next = 0;
   auto start = [&](int s) {
     Refinement& j = jobs[next];
     j.t = j.lo + (j.hi - j.lo) * j.v_lo / (j.v_lo - j.v_hi);
     slot_job[s] = next++;
     step[s] = 0;
   };
-  while (num_slots < 2 && next < n) start(num_slots++);
+  while (num_slots < kSlots && next < n) start(num_slots++);
   while (num_slots > 0) {
-    double x[2], y[2], z[2], v[2];
+    double x[kSlots], y[kSlots], z[kSlots], v[kSlots];
     for (int s = 0; s < num_slots; ++s) {
       Refinement& j = jobs[slot_job[s]];
       PointOnRay(j.origin, j.direction, j.t, j.c);
@@ -89,20 +92,35 @@ void RefineCrossings(const ShapeLookup& lookup, const ShapeLookup::DenseValuePai
       y[s] = j.c[1];
       z[s] = j.c[2];
     }
-    ShapeLookup::DenseCell cells[2];
-    double g[2][3];
-    if (num_slots == 2 && pair != nullptr && pair->EvaluateInside(x, y, z, cells, v, g)) {
-      for (int s = 0; s < 2; ++s) {
+    ShapeLookup::DenseCell cells[kSlots];
+    double g[kSlots][3];
+    // The slots [first, first + count) evaluated in lanes: their cells and gradients into their jobs.
+    auto take_lanes = [&](int first, int count) {
+      for (int s = first; s < first + count; ++s) {
         Refinement& j = jobs[slot_job[s]];
         j.cell = cells[s];
         j.in_cell = true;
         for (int a = 0; a < 3; ++a) j.g_c[a] = g[s][a];
       }
-    } else {
-      for (int s = 0; s < num_slots; ++s) {
-        Refinement& j = jobs[slot_job[s]];
-        v[s] = ValueAndGradient(lookup, phi_z, j.c, j.g_c, &j.cell, &j.in_cell);
+    };
+    int e = 0;  // the next slot to evaluate
+    if (four && num_slots == kSlots && pair->EvaluateInside4(x, y, z, cells, v, g)) {
+      take_lanes(0, kSlots);
+      e = kSlots;
+    }
+    for (; pair != nullptr && e + 2 <= num_slots; e += 2) {
+      if (pair->EvaluateInside(x + e, y + e, z + e, cells + e, v + e, g + e)) {
+        take_lanes(e, 2);
+        continue;
       }
+      for (int t = e; t < e + 2; ++t) {
+        Refinement& j = jobs[slot_job[t]];
+        v[t] = ValueAndGradient(lookup, phi_z, j.c, j.g_c, &j.cell, &j.in_cell);
+      }
+    }
+    for (; e < num_slots; ++e) {
+      Refinement& j = jobs[slot_job[e]];
+      v[e] = ValueAndGradient(lookup, phi_z, j.c, j.g_c, &j.cell, &j.in_cell);
     }
     for (int s = 0; s < num_slots;) {
       Refinement& j = jobs[slot_job[s]];
