@@ -12,7 +12,7 @@
 #endif
 #if defined(__x86_64__) && defined(__GNUC__)
 #include <immintrin.h>
-#define SAMP_CODE_GRADIENT_AVX 1
+#define SAMP_AVX_KERNELS 1
 #endif
 
 namespace samp {
@@ -388,13 +388,13 @@ inline void CodeGradientFromBase5(const float* components, int64_t base, int64_t
 }
 #endif
 
-#ifdef SAMP_CODE_GRADIENT_AVX
+#ifdef SAMP_AVX_KERNELS
 namespace {
 
 // CodeGradientFromBase<5> with components 0-3 in the four lanes of one AVX
 // register and the fifth scalar: per lane the same products and sums in the
 // same order, so the same bits (the target is AVX without FMA: no product
-// is fused into its sum). Chosen at run time (CpuHasAvx).
+// is fused into its sum). Chosen at run time (kCpuHasAvx).
 __attribute__((target("avx"))) void CodeGradientFromBase5Avx(const float* components, int64_t base, int64_t nx,
                                                                int64_t nxy, const double* f, double* d_z) {
   const double fx = f[0], fy = f[1], fz = f[2];
@@ -423,16 +423,62 @@ const bool kCpuHasAvx = [] {
 
 bool ShapeLookup::DenseValuePair::HasEvaluate4() { return kCpuHasAvx; }
 
+namespace {
+
+// Four points' trilinear lookups in four AVX lanes, each lane the pair's
+// (and DenseAt's) operations in order: the cells, the corners of their rows
+// along x, the sums. In: the points, inside the grid box. lanes 0 and 2 of a
+// row come from one pair of loads, lanes 1 and 3 from the other.
+struct Lookup4 {
+  __m256d f[3], g[3];          // the fractions in the cells and 1 - f
+  alignas(32) double base[4];  // the cells' first corners (GridSpec::Index)
+  // Per row (0, nx, nxy, nxy + nx): its first and second corners and
+  // g[0] first + f[0] second.
+  __m256d first[4], second[4], along_x[4];
+  __m256d cy0, cy1, value;  // the sums along y, then z (+ 0, as DenseAt)
+};
+
+__attribute__((target("avx"), always_inline)) inline void LookUp4(const GridSpec& grid, double inv_voxel,
+                                                                   int64_t nx, int64_t nxy, const double* phi,
+                                                                   const __m256d* p, Lookup4* out) {
+  __m256d i[3];
+  for (int a = 0; a < 3; ++a) {
+    const __m256d u = _mm256_mul_pd(_mm256_sub_pd(p[a], _mm256_set1_pd(grid.origin[a])), _mm256_set1_pd(inv_voxel));
+    i[a] = _mm256_min_pd(_mm256_cvtepi32_pd(_mm256_cvttpd_epi32(u)), _mm256_set1_pd(double(grid.dims[a] - 2)));
+    out->f[a] = _mm256_sub_pd(u, i[a]);
+    out->g[a] = _mm256_sub_pd(_mm256_set1_pd(1.0), out->f[a]);
+  }
+  // The cells' first corners (integers far below 2^53: exact as doubles).
+  _mm256_store_pd(out->base, _mm256_add_pd(_mm256_add_pd(i[0], _mm256_mul_pd(_mm256_set1_pd(double(nx)), i[1])),
+                                           _mm256_mul_pd(_mm256_set1_pd(double(nxy)), i[2])));
+  const double* c[4];
+  for (int k = 0; k < 4; ++k) c[k] = phi + int64_t(out->base[k]);
+  const int64_t rows[4] = {0, nx, nxy, nxy + nx};
+  for (int r = 0; r < 4; ++r) {
+    const int64_t k = rows[r];
+    const __m256d even = _mm256_set_m128d(_mm_loadu_pd(c[2] + k), _mm_loadu_pd(c[0] + k));
+    const __m256d odd = _mm256_set_m128d(_mm_loadu_pd(c[3] + k), _mm_loadu_pd(c[1] + k));
+    out->first[r] = _mm256_unpacklo_pd(even, odd);
+    out->second[r] = _mm256_unpackhi_pd(even, odd);
+    out->along_x[r] = _mm256_add_pd(_mm256_mul_pd(out->g[0], out->first[r]), _mm256_mul_pd(out->f[0], out->second[r]));
+  }
+  out->cy0 = _mm256_add_pd(_mm256_mul_pd(out->g[1], out->along_x[0]), _mm256_mul_pd(out->f[1], out->along_x[1]));
+  out->cy1 = _mm256_add_pd(_mm256_mul_pd(out->g[1], out->along_x[2]), _mm256_mul_pd(out->f[1], out->along_x[3]));
+  out->value = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(out->g[2], out->cy0), _mm256_mul_pd(out->f[2], out->cy1)),
+                             _mm256_setzero_pd());
+}
+
+}  // namespace
+
 __attribute__((target("avx"))) void ShapeLookup::DenseValuePair::Evaluate4(const double* x, const double* y,
                                                                           const double* z, double* values) const {
   const GridSpec& grid = lookup_.grid_;
   const __m256d p[3] = {_mm256_loadu_pd(x), _mm256_loadu_pd(y), _mm256_loadu_pd(z)};
   // Evaluate's steps in four lanes: the nearest box point and the squared
   // distance to it, summed from 0 over the axes in order.
-  __m256d lo[3], q[3], outside_sq = _mm256_setzero_pd();
+  __m256d q[3], outside_sq = _mm256_setzero_pd();
   for (int a = 0; a < 3; ++a) {
-    lo[a] = _mm256_set1_pd(grid.origin[a]);
-    q[a] = _mm256_min_pd(_mm256_set1_pd(lookup_.max_corner_[a]), _mm256_max_pd(lo[a], p[a]));
+    q[a] = _mm256_min_pd(_mm256_set1_pd(lookup_.max_corner_[a]), _mm256_max_pd(_mm256_set1_pd(grid.origin[a]), p[a]));
     const __m256d outside = _mm256_sub_pd(p[a], q[a]);
     outside_sq = _mm256_add_pd(outside_sq, _mm256_mul_pd(outside, outside));
   }
@@ -444,39 +490,10 @@ __attribute__((target("avx"))) void ShapeLookup::DenseValuePair::Evaluate4(const
     }
     return;
   }
-  // The cells (LocateInside at q) and fractions.
-  const __m256d inv_voxel = _mm256_set1_pd(lookup_.inv_voxel_);
-  __m256d f[3], i[3];
-  for (int a = 0; a < 3; ++a) {
-    const __m256d u = _mm256_mul_pd(_mm256_sub_pd(q[a], lo[a]), inv_voxel);
-    i[a] = _mm256_min_pd(_mm256_cvtepi32_pd(_mm256_cvttpd_epi32(u)), _mm256_set1_pd(double(grid.dims[a] - 2)));
-    f[a] = _mm256_sub_pd(u, i[a]);
-  }
-  const __m256d base = _mm256_add_pd(_mm256_add_pd(i[0], _mm256_mul_pd(_mm256_set1_pd(double(nx_)), i[1])),
-                                     _mm256_mul_pd(_mm256_set1_pd(double(nxy_)), i[2]));
-  alignas(32) double first_corner[4];
-  _mm256_store_pd(first_corner, base);
-  const double* c[4];
-  for (int k = 0; k < 4; ++k) c[k] = phi_ + int64_t(first_corner[k]);
-  const __m256d one = _mm256_set1_pd(1.0);
-  const __m256d gx = _mm256_sub_pd(one, f[0]), gy = _mm256_sub_pd(one, f[1]), gz = _mm256_sub_pd(one, f[2]);
-  // gx c[k] + fx c[k + 1] per lane for the cells' four rows along x: lanes
-  // 0 and 2 from one pair of loads, lanes 1 and 3 from the other, then their
-  // first and second corners.
-  const int64_t rows[4] = {0, nx_, nxy_, nxy_ + nx_};
-  __m256d along_x[4];
-  for (int r = 0; r < 4; ++r) {
-    const int64_t k = rows[r];
-    const __m256d even = _mm256_set_m128d(_mm_loadu_pd(c[2] + k), _mm_loadu_pd(c[0] + k));
-    const __m256d odd = _mm256_set_m128d(_mm_loadu_pd(c[3] + k), _mm_loadu_pd(c[1] + k));
-    along_x[r] = _mm256_add_pd(_mm256_mul_pd(gx, _mm256_unpacklo_pd(even, odd)),
-                               _mm256_mul_pd(f[0], _mm256_unpackhi_pd(even, odd)));
-  }
-  const __m256d c00 = along_x[0], c10 = along_x[1], c01 = along_x[2], c11 = along_x[3];
-  const __m256d cy0 = _mm256_add_pd(_mm256_mul_pd(gy, c00), _mm256_mul_pd(f[1], c10));
-  const __m256d cy1 = _mm256_add_pd(_mm256_mul_pd(gy, c01), _mm256_mul_pd(f[1], c11));
-  const __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(gz, cy0), _mm256_mul_pd(f[2], cy1)), _mm256_setzero_pd());
-  _mm256_storeu_pd(values, _mm256_add_pd(v, _mm256_sqrt_pd(outside_sq)));
+  // The lookup at q, plus the distance to the box (sqrt(+0) = +0 inside).
+  Lookup4 at;
+  LookUp4(grid, lookup_.inv_voxel_, nx_, nxy_, phi_, q, &at);
+  _mm256_storeu_pd(values, _mm256_add_pd(at.value, _mm256_sqrt_pd(outside_sq)));
 }
 
 __attribute__((target("avx"))) bool ShapeLookup::DenseValuePair::EvaluateInside4(const double* x, const double* y,
@@ -486,59 +503,35 @@ __attribute__((target("avx"))) bool ShapeLookup::DenseValuePair::EvaluateInside4
   const GridSpec& grid = lookup_.grid_;
   const __m256d p[3] = {_mm256_loadu_pd(x), _mm256_loadu_pd(y), _mm256_loadu_pd(z)};
   // EvaluateInside's steps in four lanes: LocateInside's test (false for NaN).
-  __m256d lo[3], inside = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+  __m256d inside = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
   for (int a = 0; a < 3; ++a) {
-    lo[a] = _mm256_set1_pd(grid.origin[a]);
-    const __m256d hi = _mm256_set1_pd(lookup_.max_corner_[a]);
-    inside = _mm256_and_pd(inside, _mm256_and_pd(_mm256_cmp_pd(p[a], lo[a], _CMP_GE_OQ),
-                                                 _mm256_cmp_pd(p[a], hi, _CMP_LE_OQ)));
+    inside = _mm256_and_pd(inside, _mm256_and_pd(_mm256_cmp_pd(p[a], _mm256_set1_pd(grid.origin[a]), _CMP_GE_OQ),
+                                                 _mm256_cmp_pd(p[a], _mm256_set1_pd(lookup_.max_corner_[a]),
+                                                               _CMP_LE_OQ)));
   }
   if (_mm256_movemask_pd(inside) != 15) return false;
-  const __m256d inv_voxel = _mm256_set1_pd(lookup_.inv_voxel_);
+  Lookup4 at;
+  LookUp4(grid, lookup_.inv_voxel_, nx_, nxy_, phi_, p, &at);
   alignas(32) double fractions[3][4];
-  __m256d f[3], i[3];
-  for (int a = 0; a < 3; ++a) {
-    const __m256d u = _mm256_mul_pd(_mm256_sub_pd(p[a], lo[a]), inv_voxel);
-    i[a] = _mm256_min_pd(_mm256_cvtepi32_pd(_mm256_cvttpd_epi32(u)), _mm256_set1_pd(double(grid.dims[a] - 2)));
-    f[a] = _mm256_sub_pd(u, i[a]);
-    _mm256_store_pd(fractions[a], f[a]);
-  }
-  const __m256d base = _mm256_add_pd(_mm256_add_pd(i[0], _mm256_mul_pd(_mm256_set1_pd(double(nx_)), i[1])),
-                                     _mm256_mul_pd(_mm256_set1_pd(double(nxy_)), i[2]));
-  alignas(32) double first_corner[4];
-  _mm256_store_pd(first_corner, base);
-  const double* c[4];
+  for (int a = 0; a < 3; ++a) _mm256_store_pd(fractions[a], at.f[a]);
   for (int k = 0; k < 4; ++k) {
-    cells[k].base = int64_t(first_corner[k]);
+    cells[k].base = int64_t(at.base[k]);
     for (int a = 0; a < 3; ++a) cells[k].f[a] = fractions[a][k];
-    c[k] = phi_ + cells[k].base;
   }
-  const __m256d one = _mm256_set1_pd(1.0);
-  const __m256d gx = _mm256_sub_pd(one, f[0]), gy = _mm256_sub_pd(one, f[1]), gz = _mm256_sub_pd(one, f[2]);
-  // Row r's corners, first (c[k]) and second (c[k + 1]), in the four lanes.
-  const int64_t rows[4] = {0, nx_, nxy_, nxy_ + nx_};
-  __m256d first[4], second[4], along_x[4];
-  for (int r = 0; r < 4; ++r) {
-    const int64_t k = rows[r];
-    const __m256d even = _mm256_set_m128d(_mm_loadu_pd(c[2] + k), _mm_loadu_pd(c[0] + k));
-    const __m256d odd = _mm256_set_m128d(_mm_loadu_pd(c[3] + k), _mm_loadu_pd(c[1] + k));
-    first[r] = _mm256_unpacklo_pd(even, odd);
-    second[r] = _mm256_unpackhi_pd(even, odd);
-    along_x[r] = _mm256_add_pd(_mm256_mul_pd(gx, first[r]), _mm256_mul_pd(f[0], second[r]));
-  }
-  const __m256d c00 = along_x[0], c10 = along_x[1], c01 = along_x[2], c11 = along_x[3];
-  const __m256d cy0 = _mm256_add_pd(_mm256_mul_pd(gy, c00), _mm256_mul_pd(f[1], c10));
-  const __m256d cy1 = _mm256_add_pd(_mm256_mul_pd(gy, c01), _mm256_mul_pd(f[1], c11));
   if (g) {
-    const __m256d d2 = _mm256_mul_pd(_mm256_sub_pd(cy1, cy0), inv_voxel);
-    const __m256d d1 = _mm256_mul_pd(
-        _mm256_add_pd(_mm256_mul_pd(gz, _mm256_sub_pd(c10, c00)), _mm256_mul_pd(f[2], _mm256_sub_pd(c11, c01))),
-        inv_voxel);
+    // DenseAt's differences, in the four lanes.
+    const __m256d inv_voxel = _mm256_set1_pd(lookup_.inv_voxel_);
+    const __m256d* ax = at.along_x;  // c00, c10, c01, c11
+    const __m256d d2 = _mm256_mul_pd(_mm256_sub_pd(at.cy1, at.cy0), inv_voxel);
+    const __m256d d1 = _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(at.g[2], _mm256_sub_pd(ax[1], ax[0])),
+                                                   _mm256_mul_pd(at.f[2], _mm256_sub_pd(ax[3], ax[2]))),
+                                     inv_voxel);
     __m256d dx[4];
-    for (int r = 0; r < 4; ++r) dx[r] = _mm256_sub_pd(second[r], first[r]);  // c[k + 1] - c[k]
+    for (int r = 0; r < 4; ++r) dx[r] = _mm256_sub_pd(at.second[r], at.first[r]);  // c[k + 1] - c[k]
     const __m256d d0 = _mm256_mul_pd(
-        _mm256_add_pd(_mm256_mul_pd(gz, _mm256_add_pd(_mm256_mul_pd(gy, dx[0]), _mm256_mul_pd(f[1], dx[1]))),
-                      _mm256_mul_pd(f[2], _mm256_add_pd(_mm256_mul_pd(gy, dx[2]), _mm256_mul_pd(f[1], dx[3])))),
+        _mm256_add_pd(
+            _mm256_mul_pd(at.g[2], _mm256_add_pd(_mm256_mul_pd(at.g[1], dx[0]), _mm256_mul_pd(at.f[1], dx[1]))),
+            _mm256_mul_pd(at.f[2], _mm256_add_pd(_mm256_mul_pd(at.g[1], dx[2]), _mm256_mul_pd(at.f[1], dx[3])))),
         inv_voxel);
     alignas(32) double d[3][4];
     _mm256_store_pd(d[0], d0);
@@ -548,8 +541,7 @@ __attribute__((target("avx"))) bool ShapeLookup::DenseValuePair::EvaluateInside4
       for (int a = 0; a < 3; ++a) g[k][a] = d[a][k];
     }
   }
-  const __m256d v = _mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(gz, cy0), _mm256_mul_pd(f[2], cy1)), _mm256_setzero_pd());
-  _mm256_storeu_pd(values, v);
+  _mm256_storeu_pd(values, at.value);
   return true;
 }
 #else
@@ -572,7 +564,7 @@ void ShapeLookup::CodeGradientAt(const DenseCell& cell, double* d_z) const {
   switch (num_components_) {
 #ifdef __SSE2__
     case 5:
-#ifdef SAMP_CODE_GRADIENT_AVX
+#ifdef SAMP_AVX_KERNELS
       if (kCpuHasAvx) return CodeGradientFromBase5Avx(w, cell.base, nx, nxy, cell.f, d_z);
 #endif
       return CodeGradientFromBase5(w, cell.base, nx, nxy, cell.f, d_z);

@@ -242,7 +242,9 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
     ShapeLookup::DenseCell cells[4], reference_cells[4];
     double g[4][3];
     bool all_inside = true;
-    for (int k = 0; k < 4; ++k) all_inside = lookup.LocateInside(points[lanes[k]].data(), &reference_cells[k]) && all_inside;
+    for (int k = 0; k < 4; ++k) {
+      all_inside = lookup.LocateInside(points[lanes[k]].data(), &reference_cells[k]) && all_inside;
+    }
     ASSERT_EQ(pair.EvaluateInside4(x, y, z, cells, values, g), all_inside) << i;
     if (!all_inside) continue;
     ++four_inside;

@@ -303,7 +303,7 @@ namespace {
 // round (their lookups overlap), a ray that stops handing its slot to the
 // next waiting ray so that the slots stay full until the queue runs dry.
 // Their points are kept per axis (slot s at x[s], y[s], z[s]) and evaluated
-// two at a time (ShapeLookup::DenseValuePair).
+// several at a time (SampleSlots).
 constexpr int kMarchSlots = 8;
 
 // v[s] = phi at slot s's point, s in [0, num_slots): four at a time when
@@ -423,7 +423,8 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
     q.cell = j.cell;
     q.in_cell = j.in_cell;
     q.distance = j.t;
-    q.found = !(j.t > m[job_ray[k]].limit) & (q.g_c[0] * q.u[0] + q.g_c[1] * q.u[1] + q.g_c[2] * q.u[2] < -kMinRaySlope);
+    const double slope = q.g_c[0] * q.u[0] + q.g_c[1] * q.u[1] + q.g_c[2] * q.u[2];
+    q.found = !(j.t > m[job_ray[k]].limit) & (slope < -kMinRaySlope);
   }
 }
 

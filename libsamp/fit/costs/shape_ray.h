@@ -46,8 +46,9 @@ bool FirstCrossing(const ShapeLookup& lookup, const double* phi_z, const double*
 // Batched forms for the ray-depth term: up to kRayBatch rays, marched a few
 // at a time in lockstep, one sample of each per round, so that the rays'
 // independent lookups overlap (a single ray's samples depend on each other),
-// their samples evaluated two at a time (ShapeLookup::DenseValuePair). Each
-// ray's result equals the single-ray function's.
+// their samples evaluated four at a time in AVX lanes where the CPU has AVX,
+// else two at a time (ShapeLookup::DenseValuePair). Each ray's result equals
+// the single-ray function's.
 constexpr int kRayBatch = 64;
 
 // RayDistance for each ray: in o, phi_o, u; out found, distance, c, g_c,

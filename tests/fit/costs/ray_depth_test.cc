@@ -143,6 +143,13 @@ TEST(ShapeRay, BatchedMarchesEqualTheSingleRayOnesBitForBit) {
   const Eigen::Vector3d centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
   const auto surface = testing::SampleSurface(lookup, z, 200, &rng);
   auto same = [](double a, double b) { return std::memcmp(&a, &b, sizeof(a)) == 0; };
+  // The crossing's cell as the Jacobian rows take it: LocateInside's at c.
+  auto same_cell = [&](const double* c, const ShapeLookup::DenseCell& cell, bool in_cell) {
+    ShapeLookup::DenseCell reference;
+    if (lookup.LocateInside(c, &reference) != in_cell) return false;
+    return !in_cell || (reference.base == cell.base && same(reference.f[0], cell.f[0]) &&
+                        same(reference.f[1], cell.f[1]) && same(reference.f[2], cell.f[2]));
+  };
   int found = 0, hits = 0;
   for (int trial = 0; trial < kRayBatch + 8; ++trial) {
     const int count = 1 + trial % kRayBatch;
@@ -177,6 +184,7 @@ TEST(ShapeRay, BatchedMarchesEqualTheSingleRayOnesBitForBit) {
       if (near_found) {
         ++found;
         EXPECT_TRUE(same(near[r].distance, distance)) << trial << " " << r;
+        EXPECT_TRUE(same_cell(near[r].c, near[r].cell, near[r].in_cell)) << trial << " " << r;
         for (int a = 0; a < 3; ++a) {
           EXPECT_TRUE(same(near[r].c[a], c[a]) && same(near[r].g_c[a], g_c[a])) << trial << " " << r;
         }
@@ -188,6 +196,7 @@ TEST(ShapeRay, BatchedMarchesEqualTheSingleRayOnesBitForBit) {
       if (far_hit) {
         ++hits;
         EXPECT_TRUE(same(far[r].lambda, lambda)) << trial << " " << r;
+        EXPECT_TRUE(same_cell(far[r].c, far[r].cell, far[r].in_cell)) << trial << " " << r;
         for (int a = 0; a < 3; ++a) {
           EXPECT_TRUE(same(far[r].c[a], c[a]) && same(far[r].g_c[a], g_c[a])) << trial << " " << r;
         }
