@@ -67,6 +67,13 @@ double HuberPsi(double s, double k, double* d_psi);
 double MixturePsi(double s, double s0, double* d_psi);
 // The same with c = exp(-s0^2 / 2) given (hoisted out of a loop over points).
 double MixturePsiWithC(double s, double c, double* d_psi);
+// psi[k] and d_psi[k] = MixturePsiWithC(s[k], c, &d_psi[k]) for k in [0, n):
+// four at a time in AVX2 lanes with glibc's vector expm1, exp and log1p
+// (libmvec, at most 4 ulp each) where the CPU has AVX2 and the build found
+// libmvec (MixturePsiRowsVectorised), else one at a time. The two agree to a
+// few ulp, not bit for bit; each is deterministic on its own.
+void MixturePsiRows(const double* s, int n, double c, double* psi, double* d_psi);
+bool MixturePsiRowsVectorised();
 
 // The camera centre in the object frame of pose (rotation (c, s) = R_y(theta)).
 void CameraInObject(const Eigen::Vector3d& camera, const double* pose, double c, double s, double* o_cam);
@@ -103,10 +110,8 @@ class DataCost : public ceres::CostFunction {
   DataCost(const ShapeLookup* lookup, const std::vector<Eigen::Vector3d>& points_in_world,
            const std::vector<double>& sigmas, const DataCostOptions& options, bool with_rays);
 
-  // The robustifier chosen by the options (mixture or Huber) at s.
-  double Robust(double s, double* d_psi) const {
-    return mixture_ ? MixturePsiWithC(s, mixture_c_, d_psi) : HuberPsi(s, huber_, d_psi);
-  }
+  // Rows written at a time by WriteDistanceRows.
+  static constexpr int kRowChunk = 64;
 
   // What the rows of one evaluation at (z, pose) share: R, the rotation
   // (c, s) = R_y(theta), phi_z's dense grid (ShapeLookup::DenseCached) and the
@@ -146,35 +151,21 @@ class DataCost : public ceres::CostFunction {
     u[2] = s * w[0] + c * w[2];
   }
 
-  // The row of point i from its signed distance phi (kPaper, kRayDepth):
-  // r_i = sqrt(w/N) psi(phi / sigma_i) into *residual, and its Jacobian rows
-  // from phi's derivatives at o (WriteJacobianRow).
-  void WriteDistanceRow(int i, double phi, double c, double s, const double* g, const double* o, int nr,
-                        double* residual, double* dz_row, double* pose_row) const {
-    double d_psi = 1.0;
-    *residual = sqrt_weight_ * Robust(phi * inv_sigmas_[i], &d_psi);  // s_i = phi / sigma_i
-    const double f = sqrt_weight_ * d_psi * inv_sigmas_[i];
-    WriteJacobianRow(f, c, s, g, o, nr, dz_row, pose_row);
-  }
+  // The rows of points [first, first + n) (n <= kRowChunk) from their signed
+  // distances phi[k] (kPaper, kRayDepth): r_i = sqrt(w/N) psi(phi / sigma_i)
+  // into residuals[k], the robustifier (mixture or Huber, by the options) over
+  // all n at once (MixturePsiRows), then each point's Jacobian rows from
+  // phi's derivatives g[k] at o[k] (WriteJacobianRow; d/dz rows at jz + k
+  // jz_stride holding d phi / dz, pose rows at jp + k jp_stride; null: skipped).
+  void WriteDistanceRows(int first, int n, const double* phi, const double (*g)[3], const double (*o)[3], double c,
+                         double s, int nr, double* residuals, double* jz, int jz_stride, double* jp,
+                         int jp_stride) const;
 
   // EvaluateRows of the paper's term (kPaper): phi_z and its derivatives at
-  // each point's object-frame position o, then WriteDistanceRow. (RayDepthCost
+  // each point's object-frame position o, then WriteDistanceRows. (RayDepthCost
   // has its own loop: phi at o first, the derivatives where the residual is taken.)
   bool DistanceRows(const double* z, const double* pose, int begin, int end, double* residuals, double* jz,
-                    int jz_stride, double* jp, int jp_stride) const {
-    const PoseFrame at = AtPose(z, pose);
-    for (int row = 0; row < end - begin; ++row) {
-      const int i = begin + row;
-      double o[3], g[3];
-      PointInObject(i, pose, at.c, at.s, o);
-      double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
-      const double phi = lookup_->EvaluateDense(at.phi_z, o, jp ? g : nullptr, dz_row);
-      if (!std::isfinite(phi)) return false;
-      WriteDistanceRow(i, phi, at.c, at.s, g, o, at.nr, &residuals[row], dz_row,
-                       jp ? jp + size_t(row) * jp_stride : nullptr);
-    }
-    return true;
-  }
+                    int jz_stride, double* jp, int jp_stride) const;
 
   const ShapeLookup* lookup_;
   std::vector<double> points_;      // 3 per point (world)

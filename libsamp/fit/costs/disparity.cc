@@ -1,5 +1,6 @@
 #include "libsamp/fit/costs/disparity.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "libsamp/core/error.h"
@@ -72,18 +73,24 @@ RayResidual DisparityCost::Residual(int i, const double* phi_z, const double* o_
 bool DisparityCost::EvaluateRows(const double* z, const double* pose, int begin, int end, double* residuals,
                                  double* jz, int jz_stride, double* jp, int jp_stride) const {
   const PoseFrame at = AtPose(z, pose);
-  for (int row = 0; row < end - begin; ++row) {
-    const int i = begin + row;
-    double u[3];
-    RayInObject(i, at.c, at.s, u);
-    double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
-    double m, o[3], g[3];
-    const RayResidual ray = Residual(i, at.phi_z, at.o_cam, u, &m, o, jp ? g : nullptr, dz_row);
-    if (!std::isfinite(ray.value)) return false;
-    double d_psi = 1.0;
-    residuals[row] = sqrt_weight_ * MixturePsiWithC(ray.value, mixture_c_, &d_psi);
-    const double f = sqrt_weight_ * d_psi * m;
-    WriteJacobianRow(f, at.c, at.s, g, o, at.nr, dz_row, jp ? jp + size_t(row) * jp_stride : nullptr);
+  for (int first = begin; first < end; first += kRowChunk) {
+    const int n = std::min(kRowChunk, end - first), row0 = first - begin;
+    double value[kRowChunk], m[kRowChunk], o[kRowChunk][3], g[kRowChunk][3];
+    for (int k = 0; k < n; ++k) {
+      double u[3];
+      RayInObject(first + k, at.c, at.s, u);
+      double* dz_row = jz ? jz + size_t(row0 + k) * jz_stride : nullptr;
+      value[k] = Residual(first + k, at.phi_z, at.o_cam, u, &m[k], o[k], jp ? g[k] : nullptr, dz_row).value;
+      if (!std::isfinite(value[k])) return false;
+    }
+    double psi[kRowChunk], d_psi[kRowChunk];
+    MixturePsiRows(value, n, mixture_c_, psi, d_psi);
+    for (int k = 0; k < n; ++k) {
+      residuals[row0 + k] = sqrt_weight_ * psi[k];
+      const double f = sqrt_weight_ * d_psi[k] * m[k];
+      WriteJacobianRow(f, at.c, at.s, g[k], o[k], at.nr, jz ? jz + size_t(row0 + k) * jz_stride : nullptr,
+                       jp ? jp + size_t(row0 + k) * jp_stride : nullptr);
+    }
   }
   return true;
 }

@@ -148,12 +148,13 @@ void RayDepthCost::FindFarCrossings(const PoseFrame& at, Batch* batch) const {
 
 void RayDepthCost::WriteRows(const PoseFrame& at, int begin, Batch* batch, double* residuals, double* jz,
                              int jz_stride, double* jp, int jp_stride) const {
+  static_assert(kRayBatch <= kRowChunk, "a batch's rows are written at once");
   Batch& rays = *batch;
+  const int row0 = rays.first - begin;
+  double value[kRayBatch], g[kRayBatch][3];
   for (int b = 0; b < rays.count; ++b) {
-    const int i = rays.first + b, row = i - begin;
-    double* dz_row = jz ? jz + size_t(row) * jz_stride : nullptr;
-    double g[3];
-    double value = rays.phi[b];
+    double* dz_row = jz ? jz + size_t(row0 + b) * jz_stride : nullptr;
+    value[b] = rays.phi[b];
     if (rays.found[b]) {
       // phi_eff = sign(phi) distance; by implicit differentiation of
       // phi(crossing) = 0 its derivatives are those of phi at the crossing
@@ -162,7 +163,7 @@ void RayDepthCost::WriteRows(const PoseFrame& at, int begin, Batch* batch, doubl
       const double m = -1.0 / (g_c[0] * rays.u[b][0] + g_c[1] * rays.u[b][1] + g_c[2] * rays.u[b][2]);
       for (int a = 0; a < 3; ++a) {
         rays.o[b][a] = rays.crossing[b][a];
-        g[a] = g_c[a] * m;
+        g[b][a] = g_c[a] * m;
       }
       if (dz_row) {
         // The crossing's cell from its last Newton step (EvaluateDense's d/dz, bit for bit).
@@ -173,17 +174,18 @@ void RayDepthCost::WriteRows(const PoseFrame& at, int begin, Batch* batch, doubl
         }
         for (int r = 0; r < at.nr; ++r) dz_row[r] *= m;
       }
-      value = rays.phi[b] < 0.0 ? -rays.distance[b] : rays.distance[b];
+      value[b] = rays.phi[b] < 0.0 ? -rays.distance[b] : rays.distance[b];
     } else if (rays.o_in_cell[b]) {
       // The point's cell from StartBatch (EvaluateDense's derivatives, bit for bit).
-      if (jp) lookup_->DenseAt(at.phi_z, rays.o_cell[b], g);
+      if (jp) lookup_->DenseAt(at.phi_z, rays.o_cell[b], g[b]);
       if (dz_row) lookup_->CodeGradientAt(rays.o_cell[b], dz_row);
     } else if (jp || dz_row) {
-      lookup_->EvaluateDense(at.phi_z, rays.o[b], jp ? g : nullptr, dz_row);
+      lookup_->EvaluateDense(at.phi_z, rays.o[b], jp ? g[b] : nullptr, dz_row);
     }
-    WriteDistanceRow(i, value, at.c, at.s, g, rays.o[b], at.nr, &residuals[row], dz_row,
-                     jp ? jp + size_t(row) * jp_stride : nullptr);
   }
+  WriteDistanceRows(rays.first, rays.count, value, g, rays.o, at.c, at.s, at.nr, residuals + row0,
+                    jz ? jz + size_t(row0) * jz_stride : nullptr, jz_stride,
+                    jp ? jp + size_t(row0) * jp_stride : nullptr, jp_stride);
 }
 
 }  // namespace samp
