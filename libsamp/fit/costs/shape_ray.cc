@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 
 #include "libsamp/core/error.h"
@@ -28,6 +29,20 @@ void PointOnRay(const double* origin, const double* direction, double t, double*
 // v > 0, without a branch on the ray's side (the product by +-1 is exact;
 // false for 0 and NaN).
 inline bool SameSide(double sign, double v) { return sign * v > 0.0; }
+
+// stop(s) for the lockstep slots s whose bits are set in `stops`, from the
+// highest down: the slots above the one handing over then all go on (or hold
+// new work), so the last slot may move into it. Each slot's outcome is
+// computed first without a branch; what remains is one branch per stopping
+// slot and round instead of one per slot and round.
+template <typename Stop>
+inline void HandOverStopped(uint32_t stops, Stop stop) {
+  while (stops != 0) {
+    const int s = 31 - __builtin_clz(stops);
+    stops &= ~(1u << s);
+    stop(s);
+  }
+}
 
 // lookup.EvaluateDense(phi_z, p, g, nullptr), bit for bit: the value and
 // gradient of the Newton steps, by the inlined cell lookup for points inside
@@ -323,21 +338,17 @@ inline void SampleSlots(const ShapeLookup& lookup, const ShapeLookup::DenseValue
 }
 
 // The ray in slot s stops: the next waiting ray of queue[*next..queued)
-// takes the slot (load(s, ray); its first sample comes in the next round)
-// and the next slot to look at is s + 1; once the queue is dry the last
-// slot's state (move(s, last)) and its value v move into slot s, which is
-// looked at again. Returns that slot.
+// takes the slot (load(s, ray); its first sample comes in the next round),
+// else (the queue dry) the last slot's state moves into slot s
+// (move(s, last)).
 template <typename Load, typename Move>
-inline int HandOverSlot(int s, const int* queue, int queued, int* next, double* v, int* num_slots, Load load,
-                        Move move) {
+inline void HandOverSlot(int s, const int* queue, int queued, int* next, int* num_slots, Load load, Move move) {
   if (*next < queued) {
     load(s, queue[(*next)++]);
-    return s + 1;
+    return;
   }
   --*num_slots;
   move(s, *num_slots);
-  v[s] = v[*num_slots];
-  return s;
 }
 
 }  // namespace
@@ -385,21 +396,21 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
       z[s] = o[2] + a.hi * a.direction[2];
     }
     SampleSlots(lookup, pair, four, phi_z, x, y, z, num_slots, v);
-    for (int s = 0; s < num_slots;) {
+    // Every slot's sample, and whether its ray stops, without a branch on it
+    // (the tests joined by &): whether a ray goes on is what the predictor
+    // cannot know.
+    uint32_t stops = 0;
+    for (int s = 0; s < num_slots; ++s) {
       March& a = m[slot_ray[s]];
       const double value = v[s];
       a.phi_hi = value;
       ++a.steps;
-      // One branch per sample (the tests joined by &, not &&): whether the
-      // ray goes on is what the predictor cannot know.
       const bool finite = std::isfinite(value);
-      if (finite & (a.steps < kMaxMarchSteps) & SameSide(a.sign, value) & (a.hi <= a.limit)) {
-        ++s;
-        continue;
-      }
       a.failed = !finite;
-      s = HandOverSlot(s, queue, queued, &next, v, &num_slots, load, move);
+      const bool go_on = finite & (a.steps < kMaxMarchSteps) & SameSide(a.sign, value) & (a.hi <= a.limit);
+      stops |= uint32_t(!go_on) << s;
     }
+    HandOverStopped(stops, [&](int s) { HandOverSlot(s, queue, queued, &next, &num_slots, load, move); });
   }
   // The bracketed crossings.
   Refinement jobs[kRayBatch];
@@ -488,7 +499,11 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
       z[s] = o_cam[2] + slots.l[s] * slots.u[2][s];
     }
     SampleSlots(lookup, pair, four, phi_z, x, y, z, num_slots, v);
-    for (int s = 0; s < num_slots;) {
+    // Every slot's sample, and whether its trace stops, without a branch on
+    // it (the tests joined by &); every trace steps (a stopping one's next l
+    // is not read).
+    uint32_t stops = 0;
+    for (int s = 0; s < num_slots; ++s) {
       const double value = v[s];
       // The last two samples (read only from a bracketed trace, whose
       // samples are all finite).
@@ -497,25 +512,25 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
       slots.last_l[s] = slots.l[s];
       slots.last_v[s] = value;
       ++slots.count[s];
-      // One branch per sample (the tests joined by &, not &&).
       const bool finite = std::isfinite(value);
-      if (finite & !(value < 0.0) & !(slots.l[s] >= slots.leave[s]) & !(slots.count[s] > kMaxTraceSteps) &
-          !(slots.l[s] > slots.max_lambda[s])) {
-        slots.l[s] = std::min(slots.l[s] + std::max(value, min_step), slots.leave[s]);
-        ++s;
-        continue;
-      }
+      const bool go_on = finite & !(value < 0.0) & !(slots.l[s] >= slots.leave[s]) &
+                         !(slots.count[s] > kMaxTraceSteps) & !(slots.l[s] > slots.max_lambda[s]);
+      stops |= uint32_t(!go_on) << s;
+      slots.l[s] = std::min(slots.l[s] + std::max(value, min_step), slots.leave[s]);
+    }
+    HandOverStopped(stops, [&](int s) {
       // Inside at the box entry (one sample): a miss without refine_miss.
-      const bool bracketed = finite & (value < 0.0) & (slots.count[s] >= 2);
-      // The trace stops: its result, then the slot's hand-over.
+      const double value = slots.last_v[s];
+      const bool bracketed = std::isfinite(value) & (value < 0.0) & (slots.count[s] >= 2);
+      // The trace's result, then the slot's hand-over.
       Trace& done = t[slots.ray[s]];
       done.bracketed = bracketed;
       done.last_l = slots.last_l[s];
       done.last_v = slots.last_v[s];
       done.prev_l = slots.prev_l[s];
       done.prev_v = slots.prev_v[s];
-      s = HandOverSlot(s, queue, queued, &next, v, &num_slots, load, move);
-    }
+      HandOverSlot(s, queue, queued, &next, &num_slots, load, move);
+    });
   }
   // The bracketed crossings.
   Refinement jobs[kRayBatch];
