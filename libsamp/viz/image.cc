@@ -175,9 +175,8 @@ RgbImage ColorizeSigned(const std::vector<float>& values, int width, int height,
 // ---- Text -------------------------------------------------------------------
 namespace {
 
-// Fraction of the font size above the baseline (cap height plus a little) and below it.
+// Fraction of the font size above the baseline (cap height plus a little).
 constexpr double kAscent = 0.76;
-constexpr double kDescent = 0.24;
 
 class TextRenderer {
  public:
