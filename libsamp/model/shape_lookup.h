@@ -215,6 +215,16 @@ class ShapeLookup {
 #endif
     }
 
+    // EvaluateDense(phi, p_k, g[k], nullptr) of the points p_k = (x[k], y[k],
+    // z[k]), k in [0, n), bit for bit, into values[k] (null g: the values
+    // only), with in_cell[k] = LocateInside(p_k, &cells[k]) (cells[k] set
+    // where true): four at a time when all four lie inside the grid box
+    // (EvaluateInside4, HasEvaluate4()), else two at a time when both do
+    // (EvaluateInside), else one at a time.
+    // (Inline: the callers' short runs of slots take no call.)
+    void EvaluateCells(int n, const double* x, const double* y, const double* z, DenseCell* cells, bool* in_cell,
+                       double* values, double (*g)[3]) const;
+
     // When both points lie inside the grid box: their cells (LocateInside),
     // values and d/dpoint (DenseAt(phi, cell, g); null g: the values only),
     // bit for bit, and true. False otherwise (nothing written), and always
@@ -328,5 +338,39 @@ class ShapeLookup {
   double max_abs_mean_ = 0.0;       // max |mu_v|
   double max_abs_component_ = 0.0;  // max |W_vr|
 };
+
+inline void ShapeLookup::DenseValuePair::EvaluateCells(int n, const double* x, const double* y, const double* z,
+                                                       DenseCell* cells, bool* in_cell, double* values,
+                                                       double (*g)[3]) const {
+  auto one = [&](int k) {
+    const double p[3] = {x[k], y[k], z[k]};
+    in_cell[k] = lookup_.LocateInside(p, &cells[k]);
+    values[k] = in_cell[k] ? lookup_.DenseAt(phi_, cells[k], g ? g[k] : nullptr)
+                           : lookup_.EvaluateDense(phi_, p, g ? g[k] : nullptr, nullptr);
+  };
+  // The points [k, end): two at a time, then one.
+  auto pairs = [&](int k, int end) {
+    for (; k + 2 <= end; k += 2) {
+      if (EvaluateInside(x + k, y + k, z + k, cells + k, values + k, g ? g + k : nullptr)) {
+        in_cell[k] = in_cell[k + 1] = true;
+      } else {
+        one(k);
+        one(k + 1);
+      }
+    }
+    if (k < end) one(k);
+  };
+  int k = 0;
+  if (HasEvaluate4()) {
+    for (; k + 4 <= n; k += 4) {
+      if (EvaluateInside4(x + k, y + k, z + k, cells + k, values + k, g ? g + k : nullptr)) {
+        for (int i = k; i < k + 4; ++i) in_cell[i] = true;
+      } else {
+        pairs(k, k + 4);
+      }
+    }
+  }
+  pairs(k, n);
+}
 
 }  // namespace samp

@@ -262,6 +262,64 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
   EXPECT_GT(four_inside, 40);
 }
 
+TEST(ShapeLookup, EvaluateCellsEqualsEvaluateDenseBitForBit) {
+  // Every count and offset over points inside, on and outside the grid box
+  // (and not finite): the lanes' groups mixed with the one-point path.
+  const ShapeModel model = RandomModel(5, 11);
+  const ShapeLookup lookup(model);
+  Eigen::VectorXd code(5);
+  code << 0.3, -0.8, 1.1, 0.25, -1.7;
+  const double* dense = lookup.DenseCached(code.data());
+  std::vector<Eigen::Vector3d> points = RandomPoints(model.grid, 0.02, 40, 7);
+  for (const Eigen::Vector3d& p : RandomPoints(model.grid, 0.5, 12, 8)) points.insert(points.begin() + 9, p);
+  points.insert(points.begin() + 3, Eigen::Vector3d(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0));
+  points.push_back(model.grid.MaxCorner());
+  std::vector<double> x, y, z;
+  for (const Eigen::Vector3d& p : points) x.push_back(p.x()), y.push_back(p.y()), z.push_back(p.z());
+  auto bits = [](double v) {
+    uint64_t b;
+    std::memcpy(&b, &v, sizeof(b));
+    return b;
+  };
+  const ShapeLookup::DenseValuePair pair(lookup, dense);
+  int inside = 0, outside = 0;
+  constexpr int kMax = 64;
+  ASSERT_LT(points.size(), size_t(kMax));
+  for (int first = 0; first < 4; ++first) {
+    for (int n = 0; first + n <= int(points.size()); ++n) {
+      ShapeLookup::DenseCell cells[kMax];
+      bool in_cell[kMax], in_cell_values[kMax];
+      double values[kMax + 1], value_only[kMax], g[kMax][3];
+      values[n] = -7.0;
+      pair.EvaluateCells(n, &x[first], &y[first], &z[first], cells, in_cell, values, g);
+      EXPECT_EQ(values[n], -7.0) << "wrote past the points";
+      pair.EvaluateCells(n, &x[first], &y[first], &z[first], cells, in_cell_values, value_only, nullptr);
+      for (int k = 0; k < n; ++k) {
+        const double* p = points[size_t(first + k)].data();
+        ShapeLookup::DenseCell cell;
+        const bool expected_in_cell = lookup.LocateInside(p, &cell);
+        double g_ref[3];
+        const double value = lookup.EvaluateDense(dense, p, g_ref, nullptr);
+        ASSERT_EQ(in_cell[k], expected_in_cell) << first << " " << n << " " << k;
+        EXPECT_EQ(in_cell_values[k], in_cell[k]);
+        EXPECT_EQ(bits(values[k]), bits(value)) << first << " " << n << " " << k;
+        EXPECT_EQ(bits(value_only[k]), bits(value)) << first << " " << n << " " << k;
+        if (!std::isfinite(value)) continue;
+        for (int a = 0; a < 3; ++a) EXPECT_EQ(bits(g[k][a]), bits(g_ref[a])) << k << " " << a;
+        if (!expected_in_cell) {
+          ++outside;
+          continue;
+        }
+        ++inside;
+        EXPECT_EQ(cells[k].base, cell.base);
+        for (int a = 0; a < 3; ++a) EXPECT_EQ(bits(cells[k].f[a]), bits(cell.f[a]));
+      }
+    }
+  }
+  EXPECT_GT(inside, 1000);
+  EXPECT_GT(outside, 100);
+}
+
 // Reference for InsideBox: every inside voxel and its crossings towards
 // outside neighbours along each axis (linear interpolation), all voxels scanned.
 AlignedBox InsideBoxByFullScan(const ShapeLookup& lookup, const Eigen::VectorXd& z) {

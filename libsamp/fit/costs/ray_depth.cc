@@ -55,43 +55,15 @@ bool RayDepthCost::StartBatch(const PoseFrame& at, const double* pose, Batch* ba
   Batch& rays = *batch;
   // phi at the points first; its derivatives there only when the residual
   // stays phi (no crossing along the ray): most rows take them at the crossing.
-  // Four points at a time when all four lie inside the grid box
-  // (DenseValuePair::EvaluateInside4, the CPU with AVX), else two at a time
-  // when both do (EvaluateInside), else one at a time: their cells and phi,
-  // bit for bit either way.
-  for (int b = 0; b < rays.count; ++b) PointInObject(rays.first + b, pose, at.c, at.s, rays.o[b]);
-  auto phi_at = [&](int b) {
-    rays.o_in_cell[b] = lookup_->LocateInside(rays.o[b], &rays.o_cell[b]);
-    rays.phi[b] = rays.o_in_cell[b] ? lookup_->DenseAt(at.phi_z, rays.o_cell[b], nullptr)
-                                    : lookup_->EvaluateDense(at.phi_z, rays.o[b], nullptr, nullptr);
-  };
-  const ShapeLookup::DenseValuePair pair(*lookup_, at.phi_z);
-  auto pair_at = [&](int b) {
-    const double x[2] = {rays.o[b][0], rays.o[b + 1][0]}, y[2] = {rays.o[b][1], rays.o[b + 1][1]};
-    const double z[2] = {rays.o[b][2], rays.o[b + 1][2]};
-    if (pair.EvaluateInside(x, y, z, &rays.o_cell[b], &rays.phi[b], nullptr)) {
-      rays.o_in_cell[b] = rays.o_in_cell[b + 1] = true;
-    } else {
-      phi_at(b);
-      phi_at(b + 1);
-    }
-  };
-  int first_single = 0;
-  if (ShapeLookup::DenseValuePair::HasEvaluate4()) {
-    for (; first_single + 4 <= rays.count; first_single += 4) {
-      const int b = first_single;
-      double x[4], y[4], z[4];
-      for (int k = 0; k < 4; ++k) x[k] = rays.o[b + k][0], y[k] = rays.o[b + k][1], z[k] = rays.o[b + k][2];
-      if (pair.EvaluateInside4(x, y, z, &rays.o_cell[b], &rays.phi[b], nullptr)) {
-        for (int k = 0; k < 4; ++k) rays.o_in_cell[b + k] = true;
-      } else {
-        pair_at(b);
-        pair_at(b + 2);
-      }
-    }
+  // Several at a time (DenseValuePair::EvaluateCells: their cells and phi,
+  // bit for bit).
+  double x[kRayBatch], y[kRayBatch], z[kRayBatch];
+  for (int b = 0; b < rays.count; ++b) {
+    PointInObject(rays.first + b, pose, at.c, at.s, rays.o[b]);
+    x[b] = rays.o[b][0], y[b] = rays.o[b][1], z[b] = rays.o[b][2];
   }
-  for (; first_single + 2 <= rays.count; first_single += 2) pair_at(first_single);
-  if (first_single < rays.count) phi_at(first_single);
+  const ShapeLookup::DenseValuePair pair(*lookup_, at.phi_z);
+  pair.EvaluateCells(rays.count, x, y, z, rays.o_cell, rays.o_in_cell, rays.phi, nullptr);
   for (int b = 0; b < rays.count; ++b) {
     const int i = rays.first + b;
     if (!std::isfinite(rays.phi[b])) return false;

@@ -44,21 +44,11 @@ inline void HandOverStopped(uint32_t stops, Stop stop) {
   }
 }
 
-// lookup.EvaluateDense(phi_z, p, g, nullptr), bit for bit: the value and
-// gradient of the Newton steps, by the inlined cell lookup for points inside
-// the grid box (*in_cell true, *cell set) and the general path for the others.
-inline double ValueAndGradient(const ShapeLookup& lookup, const double* phi_z, const double* p, double* g,
-                               ShapeLookup::DenseCell* cell, bool* in_cell) {
-  *in_cell = lookup.LocateInside(p, cell);
-  if (!*in_cell) return lookup.EvaluateDense(phi_z, p, g, nullptr);
-  return lookup.DenseAt(phi_z, *cell, g);
-}
-
 // The crossing of origin + t direction bracketed in [lo, hi] (phi v_lo at lo
 // and v_hi at hi on either side of 0): a secant, then Newton steps kept
 // inside the bracket until |phi| is negligible. In: origin, direction, lo,
 // hi, v_lo, v_hi; out: t, and c, g_c, v (phi), cell and in_cell
-// (ValueAndGradient) at t.
+// (DenseValuePair::EvaluateCells) at t.
 struct Refinement {
   const double* origin;
   const double* direction;
@@ -80,16 +70,12 @@ Refinement Bracket(const double* origin, const double* direction, double lo, dou
   return job;
 }
 
-// The crossings of n jobs, in four lockstep slots: their values and
-// gradients four at a time when all four points lie inside the grid box
-// (ShapeLookup::DenseValuePair::EvaluateInside4; pair non-null, the CPU with
-// AVX), else two at a time when both of a pair do (EvaluateInside), else one
-// at a time. Each job's result is the same, bit for bit, either way.
-void RefineCrossings(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair* pair, const double* phi_z,
-                     Refinement* jobs, int n) {
+// The crossings of n jobs, in four lockstep slots whose values, gradients
+// and cells are taken several at a time (DenseValuePair::EvaluateCells,
+// each lane EvaluateDense's bit for bit).
+void RefineCrossings(const ShapeLookup& lookup, const ShapeLookup::DenseValuePair& pair, Refinement* jobs, int n) {
   constexpr int kSlots = 4;
   const double tolerance = 1e-9 * lookup.grid().voxel_size;
-  const bool four = pair != nullptr && ShapeLookup::DenseValuePair::HasEvaluate4();
   int slot_job[kSlots], step[kSlots], num_slots = 0, next = 0;
   auto start = [&](int s) {
     Refinement& j = jobs[next];
@@ -108,34 +94,14 @@ void RefineCrossings(const ShapeLookup& lookup, const ShapeLookup::DenseValuePai
       z[s] = j.c[2];
     }
     ShapeLookup::DenseCell cells[kSlots];
+    bool in_cell[kSlots];
     double g[kSlots][3];
-    // The slots [first, first + count) evaluated in lanes: their cells and gradients into their jobs.
-    auto take_lanes = [&](int first, int count) {
-      for (int s = first; s < first + count; ++s) {
-        Refinement& j = jobs[slot_job[s]];
-        j.cell = cells[s];
-        j.in_cell = true;
-        for (int a = 0; a < 3; ++a) j.g_c[a] = g[s][a];
-      }
-    };
-    int e = 0;  // the next slot to evaluate
-    if (four && num_slots == kSlots && pair->EvaluateInside4(x, y, z, cells, v, g)) {
-      take_lanes(0, kSlots);
-      e = kSlots;
-    }
-    for (; pair != nullptr && e + 2 <= num_slots; e += 2) {
-      if (pair->EvaluateInside(x + e, y + e, z + e, cells + e, v + e, g + e)) {
-        take_lanes(e, 2);
-        continue;
-      }
-      for (int t = e; t < e + 2; ++t) {
-        Refinement& j = jobs[slot_job[t]];
-        v[t] = ValueAndGradient(lookup, phi_z, j.c, j.g_c, &j.cell, &j.in_cell);
-      }
-    }
-    for (; e < num_slots; ++e) {
-      Refinement& j = jobs[slot_job[e]];
-      v[e] = ValueAndGradient(lookup, phi_z, j.c, j.g_c, &j.cell, &j.in_cell);
+    pair.EvaluateCells(num_slots, x, y, z, cells, in_cell, v, g);
+    for (int s = 0; s < num_slots; ++s) {
+      Refinement& j = jobs[slot_job[s]];
+      j.in_cell = in_cell[s];
+      if (in_cell[s]) j.cell = cells[s];
+      for (int a = 0; a < 3; ++a) j.g_c[a] = g[s][a];
     }
     for (int s = 0; s < num_slots;) {
       Refinement& j = jobs[slot_job[s]];
@@ -166,7 +132,7 @@ double RefineCrossing(const ShapeLookup& lookup, const double* phi_z, const doub
                       const double* direction, double lo, double hi, double v_lo, double v_hi, double* c,
                       double* g_c, double* v) {
   Refinement job = Bracket(origin, direction, lo, hi, v_lo, v_hi);
-  RefineCrossings(lookup, nullptr, phi_z, &job, 1);
+  RefineCrossings(lookup, ShapeLookup::DenseValuePair(lookup, phi_z), &job, 1);
   for (int a = 0; a < 3; ++a) {
     c[a] = job.c[a];
     g_c[a] = job.g_c[a];
@@ -423,7 +389,7 @@ void RayDistances(const ShapeLookup& lookup, const double* phi_z, RayDistanceQue
     job_ray[num_jobs] = r;
     num_jobs += !(a.failed | SameSide(a.sign, a.phi_hi));
   }
-  RefineCrossings(lookup, &pair, phi_z, jobs, num_jobs);
+  RefineCrossings(lookup, pair, jobs, num_jobs);
   for (int k = 0; k < num_jobs; ++k) {
     const Refinement& j = jobs[k];
     RayDistanceQuery& q = rays[job_ray[k]];
@@ -543,7 +509,7 @@ void FirstCrossings(const ShapeLookup& lookup, const double* phi_z, const double
     job_ray[num_jobs] = r;
     num_jobs += a.bracketed;
   }
-  RefineCrossings(lookup, &pair, phi_z, jobs, num_jobs);
+  RefineCrossings(lookup, pair, jobs, num_jobs);
   for (int k = 0; k < num_jobs; ++k) {
     const Refinement& j = jobs[k];
     FirstCrossingQuery& q = rays[job_ray[k]];
