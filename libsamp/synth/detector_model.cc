@@ -169,6 +169,21 @@ DetectorModelOptions DetectorProfile(const std::string& name) {
   return o;
 }
 
+ClippedNormalMoments ClippedNormal(double mean, double sigma, double floor) {
+  SAMP_CHECK(std::isfinite(mean) && std::isfinite(sigma) && std::isfinite(floor) && sigma >= 0.0)
+      << "detector model: clipped normal needs a finite mean, floor and sigma >= 0 (are " << mean << ", " << floor
+      << ", " << sigma << ")";
+  if (sigma == 0.0) return {std::max(mean, floor), 0.0};
+  // e = mean + sigma max(a, z), a = (floor - mean) / sigma, z standard normal:
+  // E max(a, z) = a Phi(a) + phi(a), E max(a, z)^2 = a^2 Phi(a) + 1 - Phi(a) + a phi(a).
+  const double a = (floor - mean) / sigma;
+  const double cdf = 0.5 * std::erfc(-a / std::sqrt(2.0));
+  const double pdf = std::exp(-0.5 * a * a) / std::sqrt(2.0 * kPi);
+  const double first = a * cdf + pdf;
+  const double second = a * a * cdf + (1.0 - cdf) + a * pdf;
+  return {mean + sigma * first, sigma * std::sqrt(std::max(0.0, second - first * first))};
+}
+
 DetectorNoiseModel TrueDetectorNoiseModel(const DetectorModelOptions& o, double min_distance, double max_distance) {
   o.Check();
   SAMP_CHECK(std::isfinite(min_distance) && std::isfinite(max_distance) && min_distance >= 0.0 &&
@@ -214,12 +229,19 @@ DetectorNoiseModel TrueDetectorNoiseModel(const DetectorModelOptions& o, double 
   m.along_bias = o.along_ray_bias;
   const double typical_size[3] = {1.5, 1.8, 4.3};
   const double bias[3] = {o.height_bias, o.width_bias, o.length_bias};
+  bool clipped = false;
   for (int i = 0; i < 3; ++i) {
-    m.size_sigma[i] = positive(o.size_sigma + o.relative_size_sigma * typical_size[i], "size.sigma");
-    m.size_bias[i] = bias[i];
+    const double nominal = o.size_sigma + o.relative_size_sigma * typical_size[i];
+    const ClippedNormalMoments e = ClippedNormal(bias[i], nominal, -0.5 * typical_size[i]);  // as Detect clips
+    clipped = clipped || std::abs(e.sigma - nominal) > 1e-3;
+    m.size_sigma[i] = positive(e.sigma, "size.sigma");
+    m.size_bias[i] = e.mean;
   }
   if (o.relative_size_sigma != 0.0)
     m.notes.push_back("size: the relative sigma taken at a box of h 1.5, w 1.8, l 4.3 m");
+  if (clipped)
+    m.notes.push_back("size: a detected dimension is clipped at half the true one; the sigmas and biases are "
+                      "those of the clipped errors at a box of h 1.5, w 1.8, l 4.3 m");
   // Root mean square of a + b d over [d0, d1].
   const double a = o.yaw_sigma_deg_a, b = o.yaw_sigma_deg_b;
   m.yaw_sigma_deg = std::max(0.01, std::sqrt(a * a + 2 * a * b * centre + b * b * (centre * centre + half * half / 3.0)));
