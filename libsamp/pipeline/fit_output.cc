@@ -13,6 +13,17 @@ namespace samp {
 
 AlignedBox FittedBox(const ShapeLookup& lookup, const Eigen::VectorXd& z) { return lookup.InsideBox(z); }
 
+std::vector<std::string> GridLimitsReached(const AlignedBox& box, const GridSpec& grid) {
+  std::vector<std::string> axes;
+  if (box.IsEmpty()) return axes;
+  const char* names[3] = {"length", "height", "width"};
+  const Eigen::Vector3d lo = grid.MinCorner(), hi = grid.MaxCorner();
+  const double tolerance = 0.5 * grid.voxel_size;
+  for (int a = 0; a < 3; ++a)
+    if (box.min[a] <= lo[a] + tolerance || box.max[a] >= hi[a] - tolerance) axes.push_back(names[a]);
+  return axes;
+}
+
 std::vector<ObjectLabel> FitToLabels(const TrackFit& fit, const Track& track, const ShapeLookup& lookup) {
   SAMP_CHECK(fit.frames.size() == track.frames.size())
       << "track " << track.id << ": fit has " << fit.frames.size() << " frames, track "
@@ -263,6 +274,7 @@ void WriteTracksFile(const std::string& path, const TracksFile& file) {
       nlohmann::json jt = TrackFitToJson(t.fit, t.box);
       if (!t.mesh.empty()) jt["mesh"] = t.mesh;
       if (!t.points.empty()) jt["points"] = t.points;
+      if (!t.at_grid_limit.empty()) jt["at_grid_limit"] = t.at_grid_limit;
       js["tracks"].push_back(std::move(jt));
     }
     js["failed_tracks"] = r.failed_tracks;
@@ -293,6 +305,7 @@ TracksFile ReadTracksFile(const std::string& path) {
         jt.Read("mesh", &t.mesh);
         jt.Read("points", &t.points);
       }
+      if (jt.Has("at_grid_limit")) jt.Read("at_grid_limit", &t.at_grid_limit);
       r.tracks.push_back(std::move(t));
     }
     js.Read("failed_tracks", &r.failed_tracks);

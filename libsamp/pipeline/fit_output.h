@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "libsamp/core/grid_spec.h"
 #include "libsamp/core/json_fields.h"
 #include "libsamp/core/mesh.h"
 #include "libsamp/data/detector_noise.h"
@@ -19,6 +20,15 @@ namespace samp {
 
 // Box of the fitted shape in the object frame: extent of phi_z < 0.
 AlignedBox FittedBox(const ShapeLookup& lookup, const Eigen::VectorXd& z);
+
+// The axes along which `box` (a FittedBox) reaches the limits of the model's
+// grid, within half a voxel: "length" (x), "height" (y), "width" (z); empty
+// when it lies inside or is empty. A shape whose inside fills the grid along
+// an axis is cut by the grid, not by a surface: the fit has pushed the code
+// out of what the model spans (a vehicle larger than, or unlike, its training
+// cars), and its shape and pose are unreliable (docs/fitting.md, "Shapes at
+// the grid's limits").
+std::vector<std::string> GridLimitsReached(const AlignedBox& box, const GridSpec& grid);
 
 // KITTI tracking result of every frame of `fit` (camera frame of that frame,
 // using track.frames[k].world_from_camera): x y z = object origin, ry = yaw,
@@ -55,6 +65,7 @@ std::string FitMeshStem(const std::string& seq, int track_id, bool per_sequence_
 struct TracksFileTrack {
   TrackFit fit;              // frames without points_in_world
   AlignedBox box;            // of the fitted shape; empty when it has no inside
+  std::vector<std::string> at_grid_limit;  // GridLimitsReached(box); empty = inside the grid
   std::string mesh, points;  // relative to OUT; empty when no meshes were written
 };
 struct TracksFileSequence {

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <iomanip>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -197,6 +198,17 @@ void FitSequence(const RunFitOptions& options, const std::string& folder, const 
       const std::vector<ObjectLabel> track_labels = FitToLabels(fit, tracks[t], fitter->lookup());
       TracksFileTrack record;
       record.box = FittedBox(fitter->lookup(), fit.shape_code);
+      record.at_grid_limit = GridLimitsReached(record.box, fitter->lookup().grid());
+      if (!record.at_grid_limit.empty()) {
+        const Eigen::Vector3d size = record.box.max - record.box.min;
+        std::ostringstream what;
+        for (const std::string& a : record.at_grid_limit) what << (what.tellp() > 0 ? ", " : "") << a;
+        what << std::fixed << std::setprecision(2) << " (l x h x w " << size.x() << " x " << size.y() << " x "
+             << size.z() << " m)";
+        LogWarning() << result.name << ": track " << fit.track_id << ": the fitted shape fills the model's grid in "
+                     << what.str() << ": a vehicle the model does not span; its shape and pose are unreliable "
+                     << "(docs/fitting.md, \"Shapes at the grid's limits\")";
+      }
       if (options.write_meshes) {
         const std::string prefix = MeshPrefix(options, result.name, fit.track_id);
         const Mesh mesh = FittedSurface(fitter->lookup(), fit.shape_code);

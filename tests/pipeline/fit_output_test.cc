@@ -130,6 +130,28 @@ std::string TempFile(const std::string& name) {
   return (dir / name).string();
 }
 
+// The car grid spans x [-3, 3], y [-2.3, 0.5], z [-1.4, 1.4] m: a box within
+// half a voxel (0.05 m) of a face reaches the limit along that axis.
+TEST(FitOutput, GridLimitsReached) {
+  const GridSpec grid = GridSpec::CarDefault();
+  AlignedBox box;
+  EXPECT_TRUE(GridLimitsReached(box, grid).empty());  // empty box
+  box.min = Eigen::Vector3d(-2.2, -1.5, -0.9);
+  box.max = Eigen::Vector3d(2.2, 0.0, 0.9);
+  EXPECT_TRUE(GridLimitsReached(box, grid).empty());
+  box.max.x() = 2.94;  // 0.06 m short of the face
+  EXPECT_TRUE(GridLimitsReached(box, grid).empty());
+  box.max.x() = 2.96;
+  EXPECT_EQ(GridLimitsReached(box, grid), (std::vector<std::string>{"length"}));
+  box.max.x() = 2.2;
+  box.min.y() = -2.3;  // the roof at the grid's top
+  box.min.z() = -1.4;  // a side at the grid's
+  EXPECT_EQ(GridLimitsReached(box, grid), (std::vector<std::string>{"height", "width"}));
+  box.min = Eigen::Vector3d(-2.2, -1.5, -0.9);
+  box.max.y() = 0.5;  // inside below the road, to the grid's bottom
+  EXPECT_EQ(GridLimitsReached(box, grid), (std::vector<std::string>{"height"}));
+}
+
 TEST(FitOutput, TracksFileRoundTripAndMissingKeys) {
   Track track;
   TracksFileTrack t;
@@ -142,6 +164,7 @@ TEST(FitOutput, TracksFileRoundTripAndMissingKeys) {
   t.box = FittedBox(Lookup(), t.fit.shape_code);
   t.mesh = "meshes/track_7.ply";
   t.points = "meshes/track_7_points.ply";
+  t.at_grid_limit = {"length", "height"};
   TracksFile file;
   file.model = "model.vdb";
   TracksFileSequence sequence;
@@ -173,6 +196,7 @@ TEST(FitOutput, TracksFileRoundTripAndMissingKeys) {
   EXPECT_EQ(rt.points, t.points);
   EXPECT_EQ(rt.box.min, t.box.min);
   EXPECT_EQ(rt.box.max, t.box.max);
+  EXPECT_EQ(rt.at_grid_limit, t.at_grid_limit);
   EXPECT_EQ(rt.fit.track_id, 7);
   EXPECT_EQ(rt.fit.shape_code, t.fit.shape_code);
   EXPECT_DOUBLE_EQ(rt.fit.summary.final_cost, 1.5);

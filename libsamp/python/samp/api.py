@@ -98,6 +98,8 @@ class Track:
 
     track_id, sequence, type, mode ("joint" or "single_frame"), shape_code (R,),
     box_min / box_max (3,) of the fitted shape (None when it has no inside),
+    at_grid_limit (the axes, "length" / "height" / "width", along which the
+    shape fills the model's grid: an unreliable fit; [] when none),
     mesh / points (paths relative to the output, "" without meshes), summary
     (the fit's costs and solves, a dict), and per frame, as arrays of length F:
     frames (int), time, position_world (F, 3), yaw, speed, yaw_rate,
@@ -114,6 +116,7 @@ class Track:
         self.shape_code = np.asarray(record["shape_code"], dtype=np.float64)
         self.box_min = np.asarray(record["box_min"]) if "box_min" in record else None
         self.box_max = np.asarray(record["box_max"]) if "box_max" in record else None
+        self.at_grid_limit = list(record.get("at_grid_limit", []))
         self.summary = record.get("summary", {})
         self.mesh = mesh
         self.points = points
