@@ -48,7 +48,9 @@ std::string RunFitSummary::BriefReport() const {
       s << "FAILED: " << q.error;
       continue;
     }
-    s << q.num_fitted << "/" << q.num_tracks << " tracks, " << q.seconds << " s (frames "
+    s << q.num_fitted << "/" << q.num_tracks << " tracks";
+    if (q.num_at_grid_limit > 0) s << " (" << q.num_at_grid_limit << " at the model grid's limits)";
+    s << ", " << q.seconds << " s (frames "
       << q.input.seconds_frames << " s, tracking " << q.input.seconds_tracking << " s, fit " << q.seconds_fit
       << " s, output " << q.seconds_output << " s); tracker: " << q.input.tracking.BriefReport();
     for (const auto& f : q.track_failures) s << "\n    skipped " << f;
@@ -200,6 +202,7 @@ void FitSequence(const RunFitOptions& options, const std::string& folder, const 
       record.box = FittedBox(fitter->lookup(), fit.shape_code);
       record.at_grid_limit = GridLimitsReached(record.box, fitter->lookup().grid());
       if (!record.at_grid_limit.empty()) {
+        ++result.num_at_grid_limit;
         const Eigen::Vector3d size = record.box.max - record.box.min;
         std::ostringstream what;
         for (const std::string& a : record.at_grid_limit) what << (what.tellp() > 0 ? ", " : "") << a;

@@ -108,6 +108,7 @@ struct SequenceFitResult {
   SequenceSummary input;
   int num_tracks = 0;
   int num_fitted = 0;
+  int num_at_grid_limit = 0;      // fitted tracks whose shape fills the model's grid (GridLimitsReached)
   std::vector<std::string> track_failures;  // "track <id>: message"
   double seconds = 0.0;         // the whole sequence: input.seconds_{frames,tracking}, the two below, the rest
   double seconds_fit = 0.0;     // the tracks' fits

@@ -196,6 +196,7 @@ py::dict SequenceResultDict(const SequenceFitResult& r) {
   d["error"] = r.error;
   d["num_tracks"] = r.num_tracks;
   d["num_fitted"] = r.num_fitted;
+  d["num_at_grid_limit"] = r.num_at_grid_limit;
   d["track_failures"] = r.track_failures;
   d["input"] = r.input.BriefReport();
   d["tracker"] = r.ok ? r.input.tracking.BriefReport() : std::string();

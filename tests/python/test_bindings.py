@@ -191,6 +191,7 @@ def test_fit_sequence_on_the_real_kitti_frame(model):
     assert 8.0 < np.linalg.norm(track.position_world[0]) < 20.0
     # A car the model spans: its shape inside the grid, no flag in tracks.json.
     assert track.at_grid_limit == [] and "at_grid_limit" not in track.record
+    assert result.summary["sequences"][0]["num_at_grid_limit"] == 0
     assert result.sequences[0]["ok"] and result.sequences[0]["tracking"]["detections"] == 1
     assert result.summary["num_tracks_fitted"] == 1
     # The run's detector model (self-calibration on one detection: the defaults,
