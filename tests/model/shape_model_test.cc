@@ -81,6 +81,20 @@ double BruteForce(const GridSpec& grid, const Eigen::VectorXf& shape, const Eige
 
 // Random points within `margin` metres around the grid box, away from cell
 // faces (where the trilinear gradient jumps) and from the box faces.
+// The bits of a double, for comparisons bit for bit (NaN included).
+uint64_t Bits(double v) {
+  uint64_t b;
+  std::memcpy(&b, &v, sizeof(b));
+  return b;
+}
+
+// The code of the lane tests (RandomModel(5, 11)): a shape with inside and outside in the grid.
+Eigen::VectorXd LaneTestCode() {
+  Eigen::VectorXd code(5);
+  code << 0.3, -0.8, 1.1, 0.25, -1.7;
+  return code;
+}
+
 std::vector<Eigen::Vector3d> RandomPoints(const GridSpec& grid, double margin, int n,
                                           unsigned seed) {
   std::mt19937 rng(seed);
@@ -157,8 +171,7 @@ TEST(ShapeLookup, DenseGridsSumEachVoxelInOrder) {
 TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
   const ShapeModel model = RandomModel(5, 11);
   const ShapeLookup lookup(model);
-  Eigen::VectorXd code(5);
-  code << 0.3, -0.8, 1.1, 0.25, -1.7;
+  const Eigen::VectorXd code = LaneTestCode();
   const double* dense = lookup.DenseCached(code.data());
   std::vector<Eigen::Vector3d> points = RandomPoints(model.grid, 0.02, 300, 5);
   for (const Eigen::Vector3d& p : RandomPoints(model.grid, 0.5, 100, 6)) points.push_back(p);
@@ -171,11 +184,6 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
   points.push_back(Eigen::Vector3d(std::nextafter(lo.x(), -1e9), 0.0, 0.0));
   points.push_back(Eigen::Vector3d(std::numeric_limits<double>::quiet_NaN(), 0.0, 0.0));
   points.push_back(Eigen::Vector3d(0.0, std::numeric_limits<double>::infinity(), 0.0));
-  auto bits = [](double v) {
-    uint64_t b;
-    std::memcpy(&b, &v, sizeof(b));
-    return b;
-  };
   const ShapeLookup::DenseValuePair pair(lookup, dense);
   int both_inside = 0;
   for (size_t i = 0; i < points.size(); ++i) {
@@ -184,8 +192,8 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
       const double z[2] = {points[i].z(), points[j].z()};
       double values[2];
       pair.Evaluate(x, y, z, values);
-      EXPECT_EQ(bits(values[0]), bits(lookup.EvaluateDenseValue(dense, points[i].data()))) << i << " " << j;
-      EXPECT_EQ(bits(values[1]), bits(lookup.EvaluateDenseValue(dense, points[j].data()))) << i << " " << j;
+      EXPECT_EQ(Bits(values[0]), Bits(lookup.EvaluateDenseValue(dense, points[i].data()))) << i << " " << j;
+      EXPECT_EQ(Bits(values[1]), Bits(lookup.EvaluateDenseValue(dense, points[j].data()))) << i << " " << j;
       // EvaluateInside: the cells, values and gradients of LocateInside and
       // DenseAt when both points lie inside the box, else false.
       ShapeLookup::DenseCell cells[2], cell_i, cell_j;
@@ -205,17 +213,17 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
       ASSERT_TRUE(pair.EvaluateInside(x, y, z, value_cells, value_only, nullptr));  // the values only
       for (int k = 0; k < 2; ++k) {
         EXPECT_EQ(value_cells[k].base, cells[k].base);
-        EXPECT_EQ(bits(value_only[k]), bits(values[k]));
+        EXPECT_EQ(Bits(value_only[k]), Bits(values[k]));
       }
       for (int k = 0; k < 2; ++k) {
         const ShapeLookup::DenseCell& cell = k == 0 ? cell_i : cell_j;
         double g_ref[3];
         const double value = lookup.DenseAt(dense, cell, g_ref);
         EXPECT_EQ(cells[k].base, cell.base);
-        EXPECT_EQ(bits(values[k]), bits(value)) << i << " " << j;
+        EXPECT_EQ(Bits(values[k]), Bits(value)) << i << " " << j;
         for (int a = 0; a < 3; ++a) {
-          EXPECT_EQ(bits(cells[k].f[a]), bits(cell.f[a])) << i << " " << j;
-          EXPECT_EQ(bits(g[k][a]), bits(g_ref[a])) << i << " " << j;
+          EXPECT_EQ(Bits(cells[k].f[a]), Bits(cell.f[a])) << i << " " << j;
+          EXPECT_EQ(Bits(g[k][a]), Bits(g_ref[a])) << i << " " << j;
         }
       }
     }
@@ -235,7 +243,7 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
     }
     pair.Evaluate4(x, y, z, values);
     for (int k = 0; k < 4; ++k) {
-      EXPECT_EQ(bits(values[k]), bits(lookup.EvaluateDenseValue(dense, points[lanes[k]].data()))) << i << " " << k;
+      EXPECT_EQ(Bits(values[k]), Bits(lookup.EvaluateDenseValue(dense, points[lanes[k]].data()))) << i << " " << k;
     }
     // EvaluateInside4: LocateInside's cells and DenseAt's values and
     // gradients when all four lie inside the box, else false.
@@ -252,10 +260,10 @@ TEST(ShapeLookup, DenseValuePairEqualsOneAtATimeBitForBit) {
       double g_ref[3];
       const double value = lookup.DenseAt(dense, reference_cells[k], g_ref);
       EXPECT_EQ(cells[k].base, reference_cells[k].base) << i << " " << k;
-      EXPECT_EQ(bits(values[k]), bits(value)) << i << " " << k;
+      EXPECT_EQ(Bits(values[k]), Bits(value)) << i << " " << k;
       for (int a = 0; a < 3; ++a) {
-        EXPECT_EQ(bits(cells[k].f[a]), bits(reference_cells[k].f[a])) << i << " " << k;
-        EXPECT_EQ(bits(g[k][a]), bits(g_ref[a])) << i << " " << k;
+        EXPECT_EQ(Bits(cells[k].f[a]), Bits(reference_cells[k].f[a])) << i << " " << k;
+        EXPECT_EQ(Bits(g[k][a]), Bits(g_ref[a])) << i << " " << k;
       }
     }
   }
@@ -267,8 +275,7 @@ TEST(ShapeLookup, EvaluateCellsEqualsEvaluateDenseBitForBit) {
   // (and not finite): the lanes' groups mixed with the one-point path.
   const ShapeModel model = RandomModel(5, 11);
   const ShapeLookup lookup(model);
-  Eigen::VectorXd code(5);
-  code << 0.3, -0.8, 1.1, 0.25, -1.7;
+  const Eigen::VectorXd code = LaneTestCode();
   const double* dense = lookup.DenseCached(code.data());
   std::vector<Eigen::Vector3d> points = RandomPoints(model.grid, 0.02, 40, 7);
   for (const Eigen::Vector3d& p : RandomPoints(model.grid, 0.5, 12, 8)) points.insert(points.begin() + 9, p);
@@ -276,11 +283,6 @@ TEST(ShapeLookup, EvaluateCellsEqualsEvaluateDenseBitForBit) {
   points.push_back(model.grid.MaxCorner());
   std::vector<double> x, y, z;
   for (const Eigen::Vector3d& p : points) x.push_back(p.x()), y.push_back(p.y()), z.push_back(p.z());
-  auto bits = [](double v) {
-    uint64_t b;
-    std::memcpy(&b, &v, sizeof(b));
-    return b;
-  };
   const ShapeLookup::DenseValuePair pair(lookup, dense);
   int inside = 0, outside = 0;
   constexpr int kMax = 64;
@@ -302,17 +304,17 @@ TEST(ShapeLookup, EvaluateCellsEqualsEvaluateDenseBitForBit) {
         const double value = lookup.EvaluateDense(dense, p, g_ref, nullptr);
         ASSERT_EQ(in_cell[k], expected_in_cell) << first << " " << n << " " << k;
         EXPECT_EQ(in_cell_values[k], in_cell[k]);
-        EXPECT_EQ(bits(values[k]), bits(value)) << first << " " << n << " " << k;
-        EXPECT_EQ(bits(value_only[k]), bits(value)) << first << " " << n << " " << k;
+        EXPECT_EQ(Bits(values[k]), Bits(value)) << first << " " << n << " " << k;
+        EXPECT_EQ(Bits(value_only[k]), Bits(value)) << first << " " << n << " " << k;
         if (!std::isfinite(value)) continue;
-        for (int a = 0; a < 3; ++a) EXPECT_EQ(bits(g[k][a]), bits(g_ref[a])) << k << " " << a;
+        for (int a = 0; a < 3; ++a) EXPECT_EQ(Bits(g[k][a]), Bits(g_ref[a])) << k << " " << a;
         if (!expected_in_cell) {
           ++outside;
           continue;
         }
         ++inside;
         EXPECT_EQ(cells[k].base, cell.base);
-        for (int a = 0; a < 3; ++a) EXPECT_EQ(bits(cells[k].f[a]), bits(cell.f[a]));
+        for (int a = 0; a < 3; ++a) EXPECT_EQ(Bits(cells[k].f[a]), Bits(cell.f[a]));
       }
     }
   }
