@@ -7,8 +7,21 @@
 
 namespace samp {
 
-GridSpec GridSpec::CarDefault(double voxel_size) {
-  return FromBox(Eigen::Vector3d(-3.0, -2.3, -1.4), Eigen::Vector3d(3.0, 0.5, 1.4), voxel_size);
+GridSpec GridSpec::Car(double length, double height, double width, double voxel_size) {
+  SAMP_CHECK(std::isfinite(length) && std::isfinite(height) && std::isfinite(width) && length > 0.0 &&
+             height > 0.0 && width > 0.0)
+      << "car grid: length, height and width must be positive, got " << length << " x " << height << " x "
+      << width << " m";
+  const double bottom = 0.5;  // the grid's bottom face below the car's bottom centre (y down), m
+  return FromBox(Eigen::Vector3d(-length / 2.0, bottom - height, -width / 2.0),
+                 Eigen::Vector3d(length / 2.0, bottom, width / 2.0), voxel_size);
+}
+
+GridSpec GridSpec::CarDefault(double voxel_size) { return Car(6.0, 2.8, 2.8, voxel_size); }
+
+Eigen::Vector3d GridSpec::Size() const {
+  const Eigen::Vector3d size = MaxCorner() - MinCorner();
+  return (size * 1e6).array().round() / 1e6;
 }
 
 GridSpec GridSpec::FromBox(const Eigen::Vector3d& min_corner, const Eigen::Vector3d& max_corner,

@@ -17,10 +17,18 @@ struct GridSpec {
   // Number of samples along x, y, z.
   Eigen::Vector3i dims = Eigen::Vector3i(61, 29, 29);
 
-  // The default car grid: x in [-3.0, 3.0] (length), y in [-2.3, 0.5] (down),
-  // z in [-1.4, 1.4] (width), i.e. a 6.0 x 2.8 x 2.8 m box around a car whose
-  // bottom-centre is the origin, sampled at `voxel_size`.
+  // A car grid: a length x height x width box (m) around a car whose
+  // bottom-centre is the origin: x in [-length/2, length/2], y in
+  // [0.5 - height, 0.5] (down: its bottom face 0.5 m below the car's bottom),
+  // z in [-width/2, width/2], sampled at `voxel_size` (rounded outwards to
+  // whole voxels, FromBox).
+  static GridSpec Car(double length, double height, double width, double voxel_size = 0.1);
+  // The default car grid, Car(6.0, 2.8, 2.8): x in [-3.0, 3.0], y in
+  // [-2.3, 0.5], z in [-1.4, 1.4].
   static GridSpec CarDefault(double voxel_size = 0.1);
+  // The box's edge lengths (x, y, z) = MaxCorner() - MinCorner(), to the
+  // micrometre (so that Car(Size(), v) of a Car grid gives its box back).
+  Eigen::Vector3d Size() const;
   // A grid covering [min_corner, max_corner] at `voxel_size` (rounded outwards).
   static GridSpec FromBox(const Eigen::Vector3d& min_corner, const Eigen::Vector3d& max_corner,
                           double voxel_size);

@@ -33,13 +33,35 @@ OptionTable<TrainOptions> MakeTrainTable() {
   t.Add("sdf_folder", &O::sdf_folder, "Also write each model's SDF as <name>.vdb into this folder")
       .Flag("sdf-dir")
       .NotInJson();
-  // The model file stores the whole grid (TrainOptions::ToJson).
+  // The model file stores the whole grid (TrainOptions::ToJson). The voxel
+  // size and the box's three edges each set the car grid
+  // (GridSpec::Car) and keep the other three as they are.
   t.AddComputed<double>(
        "voxel_size", [](const O& o) { return o.grid.voxel_size; },
-       [](O* o, double voxel_size) { o->grid = GridSpec::CarDefault(voxel_size); },
-       "Voxel size in metres of the car grid (a 6.0 x 2.8 x 2.8 m box around the canonical car)")
+       [](O* o, double voxel_size) {
+         const Eigen::Vector3d size = o->grid.Size();
+         o->grid = GridSpec::Car(size.x(), size.y(), size.z(), voxel_size);
+       },
+       "Voxel size in metres of the car grid (by default a 6.0 x 2.8 x 2.8 m box around the canonical car)")
       .Flag("voxel")
       .Positive();
+  const char* axis_names[3] = {"grid_length", "grid_height", "grid_width"};
+  const char* axis_help[3] = {
+      "Length (x) of the car grid, m, centred on the car: a shape longer than the box is cut off (docs/training.md, "
+      "Grid)",
+      "Height (y) of the car grid, m: from 0.5 m below the car's bottom up to height - 0.5 m above it",
+      "Width (z) of the car grid, m, centred on the car"};
+  for (int axis = 0; axis < 3; ++axis) {
+    t.AddComputed<double>(
+         axis_names[axis], [axis](const O& o) { return o.grid.Size()[axis]; },
+         [axis](O* o, double edge) {
+           Eigen::Vector3d size = o->grid.Size();
+           size[axis] = edge;
+           o->grid = GridSpec::Car(size.x(), size.y(), size.z(), o->grid.voxel_size);
+         },
+         axis_help[axis])
+        .Positive();
+  }
   // The model file stores scan.width and scan.height.
   t.AddComputed<int>(
        "resolution", [](const O& o) { return o.scan.width; },

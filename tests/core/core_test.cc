@@ -20,6 +20,7 @@
 #include "libsamp/core/object_pool.h"
 #include "libsamp/core/ply_io.h"
 #include "libsamp/core/progress.h"
+#include "tests/testing/expect_error.h"
 #include "tests/testing/small_disk.h"
 
 namespace samp {
@@ -44,6 +45,31 @@ TEST(GridSpec, FromBoxCoversTheBox) {
   EXPECT_TRUE(grid.Position(10, 20, 5).isApprox(Eigen::Vector3d(0, 0, 0), 1e-12) ||
               grid.Position(10, 20, 5).norm() < 1e-12);
   EXPECT_TRUE(grid.ToVoxel(Eigen::Vector3d(0, 0, 0)).isApprox(Eigen::Vector3d(10, 20, 5)));
+}
+
+TEST(GridSpec, CarGrids) {
+  // The default is the 6.0 x 2.8 x 2.8 m box, to the bit (models trained before Car() existed).
+  const GridSpec literal = GridSpec::FromBox(Eigen::Vector3d(-3.0, -2.3, -1.4), Eigen::Vector3d(3.0, 0.5, 1.4), 0.1);
+  const GridSpec car = GridSpec::CarDefault();
+  EXPECT_EQ(car.dims, Eigen::Vector3i(61, 29, 29));
+  EXPECT_EQ(car.dims, literal.dims);
+  for (int a = 0; a < 3; ++a) EXPECT_EQ(car.origin[a], literal.origin[a]) << a;
+  EXPECT_EQ(car.voxel_size, literal.voxel_size);
+  EXPECT_EQ(car.Size(), Eigen::Vector3d(6.0, 2.8, 2.8));
+  // A larger box: centred in x and z, its bottom face 0.5 m below the car.
+  const GridSpec big = GridSpec::Car(6.8, 3.1, 3.2, 0.1);
+  EXPECT_EQ(big.dims, Eigen::Vector3i(69, 32, 33));
+  EXPECT_TRUE(big.MinCorner().isApprox(Eigen::Vector3d(-3.4, -2.6, -1.6), 1e-12));
+  EXPECT_TRUE(big.MaxCorner().isApprox(Eigen::Vector3d(3.4, 0.5, 1.6), 1e-12));
+  EXPECT_EQ(big.Size(), Eigen::Vector3d(6.8, 3.1, 3.2));
+  EXPECT_EQ(GridSpec::Car(big.Size().x(), big.Size().y(), big.Size().z(), 0.1), big);
+  // Edges that are no whole number of voxels are rounded outwards (at the top, +x and +z faces).
+  const GridSpec coarse = GridSpec::Car(6.0, 2.8, 2.8, 0.15);
+  EXPECT_EQ(coarse.dims, Eigen::Vector3i(41, 20, 20));
+  EXPECT_EQ(coarse.Size(), Eigen::Vector3d(6.0, 2.85, 2.85));
+  test::ExpectError([] { GridSpec::Car(0.0, 2.8, 2.8); }, {"car grid", "must be positive", "0 x 2.8 x 2.8 m"});
+  test::ExpectError([] { GridSpec::Car(6.0, -1.0, 2.8); }, {"car grid", "must be positive"});
+  test::ExpectError([] { GridSpec::Car(6.0, 2.8, 2.8, 0.0); }, {"voxel_size must be > 0"});
 }
 
 TEST(GridSpec, CheckNamesTheField) {

@@ -115,6 +115,25 @@ TEST(TrainOptionTables, TrainOptionsRulesAndJson) {
     if (b.info.name == "size_variants") b.set_list({"1", "1.1", "1.2", "0.9", "1", "1"});
   }
   EXPECT_EQ(c.grid.dims, GridSpec::CarDefault(0.05).dims);
+  // The grid's edges keep the voxel size, the voxel size keeps the edges, in either order.
+  for (const bool voxel_first : {true, false}) {
+    TrainOptions g;
+    std::vector<OptionBinding> bindings = TrainOptionTable().Bind(&g);
+    auto set = [&](const std::string& name, const std::string& value) {
+      for (const OptionBinding& b : bindings)
+        if (b.info.name == name) b.set(value);
+    };
+    if (voxel_first) set("voxel_size", "0.05");
+    set("grid_length", "6.8");
+    set("grid_height", "3.1");
+    set("grid_width", "3.2");
+    if (!voxel_first) set("voxel_size", "0.05");
+    EXPECT_EQ(g.grid, GridSpec::Car(6.8, 3.1, 3.2, 0.05)) << voxel_first;
+    EXPECT_EQ(g.grid.Size(), Eigen::Vector3d(6.8, 3.1, 3.2));
+    // The model file records the grid itself (no extra keys).
+    EXPECT_EQ(TrainOptionsFromJson(g.ToJson(), "big.vdb").grid, g.grid);
+  }
+  EXPECT_EQ(TrainOptions().grid, GridSpec::CarDefault());
   EXPECT_EQ(c.scan.width, 128);
   EXPECT_EQ(c.scan.height, 128);
   ASSERT_EQ(c.size_variants.size(), 2u);

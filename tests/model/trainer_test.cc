@@ -285,6 +285,39 @@ TEST_F(TrainerTest, SizeVariantsAddStretchedCopiesOfEveryUsableCar) {
   EXPECT_THROW(TrainShapeModel(options_), Error);
 }
 
+// A car longer than the grid is cut off at its faces; a longer grid
+// (samp train --grid-length) keeps it whole, and the model file records it.
+TEST_F(TrainerTest, ALongerGridKeepsALongCarWhole) {
+  options_.size_variants = {Eigen::Vector3d(1.4, 1.0, 1.0)};  // box1: 6.72 m long, ends at x = +-3.36 m
+  auto value_at = [&](const std::string& name, const Eigen::Vector3d& p, GridSpec* spec) {
+    VdbMetadata meta;
+    const auto grids = ReadVdb((fs::path(options_.sdf_folder) / (name + ".vdb")).string(), spec, &meta);
+    const Eigen::Vector3i v = spec->ToVoxel(p).array().round().cast<int>();
+    return grids.at(0).values.at(size_t(spec->Index(v.x(), v.y(), v.z())));
+  };
+  const std::string stretched = "box1@1.40x1.00x1.00";
+  const Eigen::Vector3d middle(0, -0.6, 0);
+  // The default grid (x in [-3, 3]): the car is still inside at the grid's end faces.
+  TrainShapeModel(options_);
+  GridSpec spec;
+  EXPECT_LT(value_at(stretched, Eigen::Vector3d(3.0, -0.6, 0), &spec), 0.0f);
+  EXPECT_LT(value_at(stretched, Eigen::Vector3d(-3.0, -0.6, 0), &spec), 0.0f);
+  EXPECT_EQ(spec, GridSpec::CarDefault(0.2));
+  // A 7.6 m grid: inside up to its ends, outside beyond them, as far as the grid reaches.
+  options_.grid = GridSpec::Car(7.6, 2.8, 2.8, 0.2);
+  options_.output_path = (root_ / "out" / "long.vdb").string();
+  options_.sdf_folder = (root_ / "sdf_long").string();
+  TrainShapeModel(options_);
+  EXPECT_LT(value_at(stretched, middle, &spec), 0.0f);
+  EXPECT_LT(value_at(stretched, Eigen::Vector3d(3.2, -0.6, 0), &spec), 0.0f);
+  EXPECT_GT(value_at(stretched, Eigen::Vector3d(3.6, -0.6, 0), &spec), 0.0f);
+  EXPECT_GT(value_at(stretched, Eigen::Vector3d(-3.6, -0.6, 0), &spec), 0.0f);
+  EXPECT_EQ(spec, GridSpec::Car(7.6, 2.8, 2.8, 0.2));
+  const ShapeModel model = ShapeModel::Load(options_.output_path);
+  EXPECT_EQ(model.grid, GridSpec::Car(7.6, 2.8, 2.8, 0.2));
+  EXPECT_EQ(TrainOptionsFromJson(model.options_json, "long.vdb").grid, model.grid);
+}
+
 TEST_F(TrainerTest, RejectsBadOptionsAndFolders) {
   TrainOptions options = options_;
   options.cad_folder = (root_ / "does_not_exist").string();

@@ -40,7 +40,7 @@ void RegisterTrainCommand(CLI::App* app) {
   const std::string run_group = "Options";
   AddTableOptions(command,
                   Only(run, {"cad_folder", "output_path", "manifest", "preset", "sdf_folder", "voxel_size",
-                             "resolution"}),
+                             "grid_length", "grid_height", "grid_width", "resolution"}),
                   "", run_group);
   // ScanOptions, SdfOptions, the quality gate and PcaOptions: every field from
   // their tables (scan/scan_option_table.h, sdf/sdf_option_table.h, model/pca_option_table.h).
