@@ -46,9 +46,9 @@ OptionTable<TrainOptions> MakeTrainTable() {
       .Flag("voxel")
       .Positive();
   const char* axis_names[3] = {"grid_length", "grid_height", "grid_width"};
-  const char* axis_help[3] = {
-      "Length (x) of the car grid, m, centred on the car: a shape longer than the box is cut off (docs/training.md, "
-      "Grid)",
+  const std::string axis_help[3] = {
+      std::string("Length (x) of the car grid, m, centred on the car: a shape longer than the box is cut off ") +
+          "(docs/training.md, Grid)",
       "Height (y) of the car grid, m: from 0.5 m below the car's bottom up to height - 0.5 m above it",
       "Width (z) of the car grid, m, centred on the car"};
   for (int axis = 0; axis < 3; ++axis) {
