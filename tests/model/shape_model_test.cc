@@ -79,8 +79,6 @@ double BruteForce(const GridSpec& grid, const Eigen::VectorXf& shape, const Eige
   return value + (p - q).norm();
 }
 
-// Random points within `margin` metres around the grid box, away from cell
-// faces (where the trilinear gradient jumps) and from the box faces.
 // The bits of a double, for comparisons bit for bit (NaN included).
 uint64_t Bits(double v) {
   uint64_t b;
@@ -95,6 +93,8 @@ Eigen::VectorXd LaneTestCode() {
   return code;
 }
 
+// Random points within `margin` metres around the grid box, away from cell
+// faces (where the trilinear gradient jumps) and from the box faces.
 std::vector<Eigen::Vector3d> RandomPoints(const GridSpec& grid, double margin, int n,
                                           unsigned seed) {
   std::mt19937 rng(seed);
