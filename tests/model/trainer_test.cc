@@ -87,6 +87,14 @@ const TrainedShape* FindShape(const TrainSummary& summary, const std::string& na
   return nullptr;
 }
 
+// The SDF value at the voxel nearest to `p` of the model `name` written to `sdf_folder` (--sdf-dir); its grid in *spec.
+float SdfValueAt(const std::string& sdf_folder, const std::string& name, const Eigen::Vector3d& p, GridSpec* spec) {
+  VdbMetadata meta;
+  const auto grids = ReadVdb((fs::path(sdf_folder) / (name + ".vdb")).string(), spec, &meta);
+  const Eigen::Vector3i v = spec->ToVoxel(p).array().round().cast<int>();
+  return grids.at(0).values.at(size_t(spec->Index(v.x(), v.y(), v.z())));
+}
+
 TEST_F(TrainerTest, TrainsFromAFolderAndSkipsBadFiles) {
   const TrainSummary summary = TrainShapeModel(options_);
   ASSERT_EQ(summary.shapes.size(), 8u) << summary.BriefReport();
@@ -272,10 +280,7 @@ TEST_F(TrainerTest, SizeVariantsAddStretchedCopiesOfEveryUsableCar) {
   TrainShapeModel(options_);
   auto value_at = [&](const std::string& name, const Eigen::Vector3d& p) {
     GridSpec spec;
-    VdbMetadata meta;
-    const auto grids = ReadVdb((fs::path(options_.sdf_folder) / (name + ".vdb")).string(), &spec, &meta);
-    const Eigen::Vector3i v = spec.ToVoxel(p).array().round().cast<int>();
-    return grids.at(0).values.at(size_t(spec.Index(v.x(), v.y(), v.z())));
+    return SdfValueAt(options_.sdf_folder, name, p, &spec);
   };
   EXPECT_LT(value_at("box1@1.00x1.30x1.00", Eigen::Vector3d(0, -1.6, 0)), 0.0f);
   EXPECT_LT(value_at("box1@1.00x1.30x1.00", Eigen::Vector3d(0, -0.2, 0)), 0.0f);
@@ -290,10 +295,7 @@ TEST_F(TrainerTest, SizeVariantsAddStretchedCopiesOfEveryUsableCar) {
 TEST_F(TrainerTest, ALongerGridKeepsALongCarWhole) {
   options_.size_variants = {Eigen::Vector3d(1.4, 1.0, 1.0)};  // box1: 6.72 m long, ends at x = +-3.36 m
   auto value_at = [&](const std::string& name, const Eigen::Vector3d& p, GridSpec* spec) {
-    VdbMetadata meta;
-    const auto grids = ReadVdb((fs::path(options_.sdf_folder) / (name + ".vdb")).string(), spec, &meta);
-    const Eigen::Vector3i v = spec->ToVoxel(p).array().round().cast<int>();
-    return grids.at(0).values.at(size_t(spec->Index(v.x(), v.y(), v.z())));
+    return SdfValueAt(options_.sdf_folder, name, p, spec);
   };
   const std::string stretched = "box1@1.40x1.00x1.00";
   const Eigen::Vector3d middle(0, -0.6, 0);
